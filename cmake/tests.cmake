@@ -1,0 +1,22 @@
+# Unit tests: test/unit/test_<module>_<what>.cpp -> gtest executable linked with
+# vitamin_e_<module> (and test/support/*.cpp helpers). Registered with catkin,
+# so they run under ctest and catkin_make run_tests.
+if(CATKIN_ENABLE_TESTING)
+  file(GLOB VITAMIN_E_TEST_SUPPORT CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/test/support/*.cpp)
+  file(GLOB VITAMIN_E_UNIT_TESTS CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/test/unit/test_*.cpp)
+  foreach(test_src ${VITAMIN_E_UNIT_TESTS})
+    get_filename_component(test_name ${test_src} NAME_WE)
+    string(REGEX REPLACE "^test_([a-z]+)_.*$" "\\1" test_module ${test_name})
+    if(NOT TARGET vitamin_e_${test_module})
+      message(FATAL_ERROR "${test_src}: name must be test_<module>_<what>.cpp with a core module")
+    endif()
+    catkin_add_gtest(${test_name} ${test_src} ${VITAMIN_E_TEST_SUPPORT}
+      WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/test)
+    target_link_libraries(${test_name} vitamin_e_${test_module})
+    target_compile_definitions(${test_name} PRIVATE VITAMIN_E_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
+  endforeach()
+  # Tests of the offline tools and the ROS layer (test/ros/*.test, test/tools/*.cpp).
+  if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/cmake/ros_tests.cmake)
+    include(cmake/ros_tests.cmake)
+  endif()
+endif()

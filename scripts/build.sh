@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Builds vitamin_e in a catkin workspace at .ws/ (git-ignored; src/vitamin_e links
+# to this repository). Installs missing Debian packages first.
+#   ./scripts/build.sh [--sanitize] [--tests] [--target T ...]
+# --sanitize builds with ASan+UBSan in .ws_sanitize/ instead.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+sanitize=OFF
+tests=0
+targets=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --sanitize) sanitize=ON; VE_WS="$VE_ROOT/.ws_sanitize" ;;
+    --tests) tests=1 ;;
+    --target) shift; targets+=("$1") ;;
+    *) ve_die "build.sh: unknown option '$1'" ;;
+  esac
+  shift
+done
+export VE_WS
+
+"$VE_ROOT/scripts/setup.sh"
+
+mkdir -p "$VE_WS/src"
+if [ ! -e "$VE_WS/src/vitamin_e" ]; then
+  ln -s "$VE_ROOT" "$VE_WS/src/vitamin_e"
+fi
+if [ ! -e "$VE_WS/src/CMakeLists.txt" ]; then
+  ln -s /usr/share/catkin/cmake/toplevel.cmake "$VE_WS/src/CMakeLists.txt"
+fi
+
+jobs="${VE_JOBS:-$(nproc)}"
+build_type="Release"
+[ "$sanitize" = ON ] && build_type="RelWithDebInfo"
+if [ ! -f "$VE_WS/build/Makefile" ] || [ ! -f "$VE_WS/build/.ve_configured_$sanitize" ]; then
+  rm -rf "$VE_WS/build"
+  mkdir -p "$VE_WS/build"
+  (cd "$VE_WS/build" && cmake ../src \
+      -DCMAKE_BUILD_TYPE="$build_type" \
+      -DCATKIN_DEVEL_PREFIX="$VE_WS/devel" \
+      -DCMAKE_INSTALL_PREFIX="$VE_WS/install" \
+      -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+      -DVITAMIN_E_SANITIZE="$sanitize" -DCATKIN_ENABLE_TESTING=ON >"$VE_WS/configure.log" 2>&1) \
+    || { tail -40 "$VE_WS/configure.log" >&2; rm -rf "$VE_WS/build"; ve_die "cmake configure failed (log: $VE_WS/configure.log)"; }
+  touch "$VE_WS/build/.ve_configured_$sanitize"
+fi
+
+if [ ${#targets[@]} -gt 0 ]; then
+  for t in "${targets[@]}"; do
+    make -C "$VE_WS/build" -j"$jobs" --no-print-directory "$t"
+  done
+else
+  make -C "$VE_WS/build" -j"$jobs" --no-print-directory
+  if [ "$tests" = 1 ]; then
+    make -C "$VE_WS/build" -j"$jobs" --no-print-directory tests
+  fi
+fi

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Builds vitamin_e and runs every test (gtest unit tests and rostests) through
+# ctest. Exits non-zero on any failure; ends with ctest's summary line.
+#   ./scripts/test.sh [--sanitize] [-R REGEX]
+# --sanitize: ASan+UBSan build (.ws_sanitize/), unit tests only.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+build_args=(--tests)
+ctest_args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --sanitize) build_args+=(--sanitize); VE_WS="$VE_ROOT/.ws_sanitize"; ctest_args+=(-E "rostest") ;;
+    -R) shift; ctest_args+=(-R "$1") ;;
+    *) ve_die "test.sh: unknown option '$1'" ;;
+  esac
+  shift
+done
+export VE_WS
+
+"$VE_ROOT/scripts/build.sh" "${build_args[@]}"
+
+set +u
+source "$VE_WS/devel/setup.bash"
+set -u
+export ROS_IP=127.0.0.1 ROS_HOSTNAME=localhost
+export ROS_HOME="$VE_WS/ros_home" ROS_LOG_DIR="$VE_WS/ros_home/log"
+mkdir -p "$ROS_LOG_DIR"
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1}"
+rm -rf "$VE_WS/build/test_results"
+cd "$VE_WS/build"
+ctest --output-on-failure --timeout 900 "${ctest_args[@]}" </dev/null
