@@ -1,0 +1,70 @@
+#pragma once
+// The VITAMIN-E SLAM system: monocular images in, poses and a dense map out.
+//   System slam(config, camera);
+//   FrameResult r = slam.process(gray_image, t);
+// process() is synchronous (sequential mode: deterministic). Not thread-safe:
+// call it from one thread at a time.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vitamin_e/camera/camera.h"
+#include "vitamin_e/common/timing.h"
+#include "vitamin_e/pipeline/frame_result.h"
+#include "vitamin_e/pipeline/system_config.h"
+
+namespace vitamin_e::pipeline {
+
+struct TrajectoryEntry {
+  double timestamp = 0.0;
+  std::string timestamp_text;  // as the dataset gave it (may be empty)
+  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
+};
+
+struct MapPoint3 {
+  std::uint64_t id = 0;
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  std::uint8_t intensity = 0;
+};
+
+class System {
+ public:
+  System(const SystemConfig& config, const camera::Camera& camera);
+  ~System();
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  // Processes one frame. image: CV_8UC1 of the calibration's size (throws
+  // std::invalid_argument otherwise). timestamp in seconds, increasing
+  // (a frame whose stamp does not increase is skipped: state kLost, message set).
+  FrameResult process(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
+
+  // Forgets map and tracks; the trajectory so far is kept.
+  void reset();
+
+  // Poses of every tracked frame so far, in time order, all in one world frame.
+  const std::vector<TrajectoryEntry>& trajectory() const;
+  // Current map points (world frame).
+  std::vector<MapPoint3> mapPoints() const;
+
+  std::size_t framesProcessed() const;
+  std::size_t framesTracked() const;
+  int initRetries() const;
+  const StageTimings& timings() const;
+  const SystemConfig& config() const;
+  const camera::Camera& camera() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Writers shared by the offline runner and the ROS services. Return false (and
+// fill *error) when the file cannot be written.
+bool saveTrajectoryTum(const std::vector<TrajectoryEntry>& trajectory, const std::string& path,
+                       std::string* error = nullptr);
+bool saveMapPly(const std::vector<MapPoint3>& points, const std::string& path, std::string* error = nullptr);
+
+}  // namespace vitamin_e::pipeline
