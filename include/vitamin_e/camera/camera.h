@@ -57,7 +57,7 @@ class Camera {
   // Normalized undistorted -> pinhole pixel (K * [x y 1]).
   Eigen::Vector2d pinholePixel(const Eigen::Vector2d& xy) const;
   // Distorted pixel -> normalized undistorted coordinates (Gauss-Newton on
-  // distortNormalized); false if it does not converge to < 1e-9 px.
+  // distortNormalized); false if it does not converge to < 1e-8 px.
   bool unprojectNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* xy) const;
   // Distorted pixel -> unit bearing in the camera frame.
   bool unproject(const Eigen::Vector2d& uv, Eigen::Vector3d* bearing_c) const;
