@@ -13,6 +13,7 @@ PACKAGES=(
   rviz libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libgtest-dev googletest
   python3-rostopic python3-rosnode python3-rosmsg python3-rosservice
   python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs python3-std-srvs
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-std-srvs
   python3-numpy python3-yaml python3-matplotlib python3-opencv
   xvfb xauth x11-apps imagemagick
 )
