@@ -1,0 +1,59 @@
+#pragma once
+// Two-view initialization from normalized correspondences (undistorted x/z, y/z).
+//
+// Method: 5-point essential matrix in RANSAC (cv::findEssentialMat with an identity camera
+// matrix; the pixel threshold is divided by focal_px), pose by cv::recoverPose (cheirality
+// vote over the four decompositions), DLT + Gauss-Newton triangulation of every inlier, then
+// checks. Degeneracy: a rotation-only model (x1 ~ R x0, i.e. the homography of a pure
+// rotation, fitted to the essential inliers) is compared with the essential model; when it
+// explains nearly as many correspondences (rotation_only_max_ratio) or the median parallax is
+// below min_parallax_deg, the result is ok=false with a reason: no map is ever built from a
+// pure rotation.
+//
+// SCALE: monocular, so the scale is arbitrary. It is fixed so that the MEDIAN DEPTH (z in
+// camera 0) of the valid points_c0 is 1; T_c1_c0.translation() is scaled accordingly.
+// T_c1_c0 maps camera-0 coordinates to camera-1 coordinates (camera 0 is the origin).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+namespace vitamin_e {
+namespace geometry {
+
+struct TwoViewConfig {
+  double ransac_threshold_px = 1.0;  // epipolar (Sampson) threshold of RANSAC, pixels
+  double focal_px = 450.0;           // converts pixel thresholds to normalized units
+  double min_parallax_deg = 1.0;     // median parallax of the triangulated points
+  double min_inlier_ratio = 0.5;     // essential-matrix inliers / correspondences
+  int min_points = 50;               // valid triangulated points
+  double confidence = 0.999;
+  int max_iterations = 1000;
+  double max_reproj_error_px = 2.0;       // per triangulated point, both views
+  double point_min_parallax_deg = 0.05;   // points below this are kept invalid (near infinity)
+  double rotation_only_max_ratio = 0.9;   // refuse if rotation-only inliers >= this * essential inliers
+  void validate() const;  // throws std::invalid_argument naming the key
+};
+
+struct TwoViewResult {
+  bool ok = false;
+  std::string reason;  // empty when ok
+  Eigen::Isometry3d T_c1_c0 = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Vector3d> points_c0;  // per correspondence, in camera 0 (valid only where valid[i])
+  std::vector<bool> valid;
+  double median_parallax_deg = 0.0;
+  int num_inliers = 0;                 // valid triangulated points
+  int num_essential_inliers = 0;       // RANSAC inliers of the essential matrix
+  int num_rotation_only_inliers = 0;   // inliers of the rotation-only model
+};
+
+TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
+                                const TwoViewConfig& config);
+
+// Rotation-only model: least-squares R with bearing(x1) ~ R bearing(x0) (Kabsch on unit
+// bearings, over mask, empty = all). Returns R_c1_c0.
+Eigen::Matrix3d fitRotationOnly(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
+                                const std::vector<bool>& mask);
+
+}  // namespace geometry
+}  // namespace vitamin_e

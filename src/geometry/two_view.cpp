@@ -1,0 +1,164 @@
+#include "vitamin_e/geometry/two_view.h"
+
+#include <Eigen/Dense>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <stdexcept>
+
+#include "vitamin_e/geometry/lie.h"
+#include "vitamin_e/geometry/triangulation.h"
+
+namespace vitamin_e {
+namespace geometry {
+
+void TwoViewConfig::validate() const {
+  if (!(ransac_threshold_px > 0.0)) throw std::invalid_argument("ransac_threshold_px must be > 0");
+  if (!(focal_px > 0.0)) throw std::invalid_argument("focal_px must be > 0");
+  if (!(min_parallax_deg >= 0.0)) throw std::invalid_argument("min_parallax_deg must be >= 0");
+  if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0))
+    throw std::invalid_argument("min_inlier_ratio must be in [0, 1]");
+  if (min_points < 5) throw std::invalid_argument("min_points must be >= 5");
+  if (!(confidence > 0.0 && confidence < 1.0)) throw std::invalid_argument("confidence must be in (0, 1)");
+  if (max_iterations < 1) throw std::invalid_argument("max_iterations must be >= 1");
+  if (!(max_reproj_error_px > 0.0)) throw std::invalid_argument("max_reproj_error_px must be > 0");
+  if (!(point_min_parallax_deg >= 0.0)) throw std::invalid_argument("point_min_parallax_deg must be >= 0");
+  if (!(rotation_only_max_ratio > 0.0)) throw std::invalid_argument("rotation_only_max_ratio must be > 0");
+}
+
+Eigen::Matrix3d fitRotationOnly(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
+                                const std::vector<bool>& mask) {
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < xy0.size(); ++i) {
+    if (!mask.empty() && !mask[i]) continue;
+    const Eigen::Vector3d b0 = xy0[i].homogeneous().normalized();
+    const Eigen::Vector3d b1 = xy1[i].homogeneous().normalized();
+    C.noalias() += b1 * b0.transpose();
+  }
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) D(2, 2) = -1.0;
+  return svd.matrixU() * D * svd.matrixV().transpose();
+}
+
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + m, v.end());
+  return v[m];
+}
+
+}  // namespace
+
+TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
+                                const TwoViewConfig& config) {
+  config.validate();
+  TwoViewResult res;
+  const int n = static_cast<int>(xy0.size());
+  if (static_cast<int>(xy1.size()) != n) throw std::invalid_argument("initializeTwoView: xy0 and xy1 differ in size");
+  res.points_c0.assign(n, Eigen::Vector3d::Zero());
+  res.valid.assign(n, false);
+  if (n < config.min_points) {
+    res.reason = "too few correspondences";
+    return res;
+  }
+
+  std::vector<cv::Point2d> p0(n), p1(n);
+  for (int i = 0; i < n; ++i) {
+    p0[i] = cv::Point2d(xy0[i].x(), xy0[i].y());
+    p1[i] = cv::Point2d(xy1[i].x(), xy1[i].y());
+  }
+  const cv::Mat K = cv::Mat::eye(3, 3, CV_64F);
+  const double thr = config.ransac_threshold_px / config.focal_px;
+  cv::Mat mask;
+  cv::Mat E = cv::findEssentialMat(p0, p1, K, cv::RANSAC, config.confidence, thr, config.max_iterations, mask);
+  if (E.empty() || E.rows != 3 || E.cols != 3) {  // several solutions stack as 3k x 3: take the first
+    if (E.rows < 3) {
+      res.reason = "essential matrix estimation failed";
+      return res;
+    }
+  }
+  E = E.rowRange(0, 3).clone();
+  cv::Mat Rcv, tcv;
+  const int n_good = cv::recoverPose(E, p0, p1, K, Rcv, tcv, mask);
+  std::vector<bool> e_in(n, false);
+  int n_e = 0;
+  for (int i = 0; i < n; ++i) {
+    if (mask.at<uchar>(i)) {
+      e_in[i] = true;
+      ++n_e;
+    }
+  }
+  res.num_essential_inliers = n_e;
+  if (n_good < config.min_points || n_e < config.min_inlier_ratio * n) {
+    res.reason = "too few essential-matrix inliers";
+    return res;
+  }
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  cv::cv2eigen(Rcv, R);
+  cv::cv2eigen(tcv, t);
+
+  // Degeneracy: does a rotation-only model explain the same correspondences?
+  {
+    const Eigen::Matrix3d R_rot = fitRotationOnly(xy0, xy1, e_in);
+    int n_rot = 0;
+    for (int i = 0; i < n; ++i) {
+      if (!e_in[i]) continue;
+      const Eigen::Vector3d q = R_rot * xy0[i].homogeneous();
+      if (q.z() > 0.0 && (xy1[i] - q.head<2>() / q.z()).norm() * config.focal_px < 2.0 * config.ransac_threshold_px)
+        ++n_rot;
+    }
+    res.num_rotation_only_inliers = n_rot;
+    if (n_rot >= config.rotation_only_max_ratio * n_e) {
+      res.reason = "degenerate: a rotation-only model explains the motion (no translation)";
+      return res;
+    }
+  }
+
+  // Triangulate each essential inlier with camera 0 at the origin.
+  Eigen::Isometry3d T_c1_c0 = Eigen::Isometry3d::Identity();
+  T_c1_c0.linear() = R;
+  T_c1_c0.translation() = t;  // unit norm from recoverPose
+  const std::vector<Eigen::Isometry3d> T_w_c = {Eigen::Isometry3d::Identity(), T_c1_c0.inverse()};
+  TriangulationConfig tc;
+  tc.focal_px = config.focal_px;
+  tc.min_parallax_deg = config.point_min_parallax_deg;
+  tc.max_reproj_error_px = config.max_reproj_error_px;
+  tc.gn_iterations = 5;
+  std::vector<double> parallax, depth;
+  for (int i = 0; i < n; ++i) {
+    if (!e_in[i]) continue;
+    const TriangulationResult tr = triangulatePoint(T_w_c, {xy0[i], xy1[i]}, tc);
+    if (!tr.ok) continue;
+    res.valid[i] = true;
+    res.points_c0[i] = tr.p_w;
+    parallax.push_back(tr.parallax_deg);
+    depth.push_back(tr.p_w.z());
+  }
+  res.num_inliers = static_cast<int>(depth.size());
+  res.median_parallax_deg = median(parallax);
+  if (res.num_inliers < config.min_points) {
+    res.reason = "too few valid triangulated points";
+    return res;
+  }
+  if (res.median_parallax_deg < config.min_parallax_deg) {
+    res.reason = "degenerate: median parallax below min_parallax_deg";
+    return res;
+  }
+  // Scale: median depth of the valid points in camera 0 becomes 1.
+  const double s = 1.0 / median(depth);
+  for (int i = 0; i < n; ++i)
+    if (res.valid[i]) res.points_c0[i] *= s;
+  T_c1_c0.translation() *= s;
+  res.T_c1_c0 = T_c1_c0;
+  res.ok = true;
+  return res;
+}
+
+}  // namespace geometry
+}  // namespace vitamin_e
