@@ -46,6 +46,8 @@ if [ ! -f "$VE_WS/build/Makefile" ] || [ ! -f "$VE_WS/build/.ve_configured_$sani
   touch "$VE_WS/build/.ve_configured_$sanitize"
 fi
 
+# Re-glob sources (new files in src/<module>/, tests, benchmarks) before naming targets.
+make -C "$VE_WS/build" --no-print-directory cmake_check_build_system >/dev/null
 if [ ${#targets[@]} -gt 0 ]; then
   for t in "${targets[@]}"; do
     make -C "$VE_WS/build" -j"$jobs" --no-print-directory "$t"

@@ -1,0 +1,80 @@
+#pragma once
+// The SLAM map: landmarks (3D points, keyed by the id of the 2D track that
+// observes them) and keyframes (poses with the normalized observations of the
+// tracks they saw). Bounded: keyframes beyond the window are retired and
+// landmarks no longer observed are moved to a voxel-thinned archive kept for
+// export, so memory stays flat on long runs.
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <deque>
+#include <unordered_map>
+#include <vector>
+
+namespace vitamin_e::map {
+
+struct Landmark {
+  std::uint64_t id = 0;  // the track id
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  std::uint8_t intensity = 0;
+  int num_observations = 0;   // keyframes that saw it (incl. retired ones)
+  std::uint64_t last_seen_frame = 0;
+  int outlier_count = 0;      // times flagged by pose estimation / BA
+};
+
+struct Keyframe {
+  std::uint64_t frame_index = 0;
+  double timestamp = 0.0;
+  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
+  // normalized undistorted observation (x/z, y/z) of each track seen
+  std::unordered_map<std::uint64_t, Eigen::Vector2d> observations;
+};
+
+struct ArchivedPoint {
+  Eigen::Vector3d p_w;
+  std::uint8_t intensity;
+};
+
+struct MapConfig {
+  int max_keyframes = 8;          // keyframes kept in the active window
+  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (scaled map units)
+  std::size_t max_archive_points = 2000000;  // hard cap on archived points
+  int min_observations_to_archive = 3;
+  void validate() const;          // throws std::invalid_argument
+};
+
+class Map {
+ public:
+  explicit Map(const MapConfig& config = {});
+
+  void clear();  // drops active keyframes and landmarks (archive kept)
+
+  Landmark* landmark(std::uint64_t id);
+  const Landmark* landmark(std::uint64_t id) const;
+  Landmark& addLandmark(std::uint64_t id, const Eigen::Vector3d& p_w, std::uint8_t intensity);
+  void removeLandmark(std::uint64_t id);  // bad point: dropped, not archived
+  const std::unordered_map<std::uint64_t, Landmark>& landmarks() const { return landmarks_; }
+  std::unordered_map<std::uint64_t, Landmark>& landmarks() { return landmarks_; }
+
+  // Adds a keyframe; retires the oldest beyond max_keyframes. Landmarks that no
+  // active keyframe observes and that were not seen since the oldest active
+  // keyframe are archived (if well observed) and removed.
+  Keyframe& addKeyframe(Keyframe keyframe);
+  const std::deque<Keyframe>& keyframes() const { return keyframes_; }
+  std::deque<Keyframe>& keyframes() { return keyframes_; }
+
+  const std::vector<ArchivedPoint>& archive() const { return archive_; }
+  // Active landmarks followed by archived points.
+  std::vector<ArchivedPoint> allPoints() const;
+
+ private:
+  void retireUnobservedLandmarks();
+  void archive(const Landmark& landmark);
+
+  MapConfig config_;
+  std::unordered_map<std::uint64_t, Landmark> landmarks_;
+  std::deque<Keyframe> keyframes_;
+  std::vector<ArchivedPoint> archive_;
+  std::unordered_map<std::int64_t, std::size_t> archive_voxels_;
+};
+
+}  // namespace vitamin_e::map

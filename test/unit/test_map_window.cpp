@@ -1,0 +1,65 @@
+#include <gtest/gtest.h>
+
+#include "vitamin_e/map/map.h"
+
+using vitamin_e::map::Keyframe;
+using vitamin_e::map::Map;
+using vitamin_e::map::MapConfig;
+
+namespace {
+Keyframe keyframeSeeing(std::uint64_t frame, std::uint64_t first_id, std::uint64_t count) {
+  Keyframe kf;
+  kf.frame_index = frame;
+  for (std::uint64_t id = first_id; id < first_id + count; ++id) kf.observations.emplace(id, Eigen::Vector2d(0, 0));
+  return kf;
+}
+}  // namespace
+
+TEST(Map, KeyframeWindowIsBoundedAndUnseenLandmarksAreArchived) {
+  MapConfig cfg;
+  cfg.max_keyframes = 3;
+  cfg.min_observations_to_archive = 1;
+  Map map(cfg);
+  // Keyframe k sees landmarks [100k, 100k + 50); each landmark is seen by one keyframe.
+  for (std::uint64_t k = 0; k < 10; ++k) {
+    for (std::uint64_t id = 100 * k; id < 100 * k + 50; ++id) {
+      map.addLandmark(id, Eigen::Vector3d(double(id), 0, 1), 7).last_seen_frame = k;
+    }
+    map.addKeyframe(keyframeSeeing(k, 100 * k, 50));
+    ASSERT_LE(map.keyframes().size(), 3u);
+  }
+  // Only the landmarks of the last three keyframes stay active.
+  EXPECT_EQ(map.landmarks().size(), 150u);
+  EXPECT_EQ(map.archive().size(), 350u);
+  EXPECT_EQ(map.allPoints().size(), 500u);
+  EXPECT_NE(map.landmark(949), nullptr);
+  EXPECT_EQ(map.landmark(50), nullptr);
+}
+
+TEST(Map, ArchiveKeepsOnePointPerVoxelAndSkipsPoorlyObserved) {
+  MapConfig cfg;
+  cfg.max_keyframes = 2;
+  cfg.archive_voxel_m = 1.0;
+  cfg.min_observations_to_archive = 2;
+  Map map(cfg);
+  for (std::uint64_t id = 0; id < 20; ++id) {
+    auto& l = map.addLandmark(id, Eigen::Vector3d(0.1 * double(id % 5), 0.2, 0.3), 1);
+    l.num_observations = id < 10 ? 3 : 1;  // the last ten are poorly observed
+  }
+  map.addKeyframe(keyframeSeeing(5, 1000, 1));
+  map.addKeyframe(keyframeSeeing(6, 1000, 1));
+  map.addKeyframe(keyframeSeeing(7, 1000, 1));  // retires keyframe 5: all 20 landmarks unobserved
+  EXPECT_TRUE(map.landmarks().empty());
+  EXPECT_EQ(map.archive().size(), 1u);  // all well-observed ones fall in one 1 m voxel
+}
+
+TEST(Map, RejectsBadConfig) {
+  MapConfig cfg;
+  cfg.max_keyframes = 1;
+  EXPECT_THROW(Map{cfg}, std::invalid_argument);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
