@@ -1,0 +1,67 @@
+#pragma once
+// Runs TsdfVolume integration off the caller's thread: submit() enqueues a
+// frame mesh with its pose into a bounded queue consumed by an owned worker
+// thread (when full, the oldest queued frame is dropped, or submit() blocks if
+// configured). In synchronous mode submit() integrates immediately.
+// extractMesh() / saveMesh() may be called from any thread.
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
+#include "vitamin_e/fusion/tsdf_volume.h"
+
+namespace vitamin_e::fusion {
+
+struct TsdfIntegratorConfig {
+  TsdfConfig tsdf;
+  bool asynchronous = true;
+  std::size_t queue_capacity = 4;
+  bool block_when_full = false;  // false: drop the oldest queued frame
+  void validate() const;         // throws std::invalid_argument naming the key
+};
+
+struct TsdfIntegratorStats {
+  std::size_t submitted = 0;
+  std::size_t integrated = 0;
+  std::size_t dropped = 0;
+  double last_integration_ms = 0.0;
+};
+
+class TsdfIntegrator {
+ public:
+  explicit TsdfIntegrator(const TsdfIntegratorConfig& config = {});
+  ~TsdfIntegrator();  // finishes the queued frames, then joins
+  TsdfIntegrator(const TsdfIntegrator&) = delete;
+  TsdfIntegrator& operator=(const TsdfIntegrator&) = delete;
+
+  void submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c, const meshing::PinholeIntrinsics& K);
+  // Blocks until every submitted frame is integrated (or dropped).
+  void flush();
+  TriangleMesh extractMesh();
+  bool saveMesh(const std::string& path, std::string* error = nullptr);
+  TsdfIntegratorStats stats() const;
+  void reset();  // clears the queue and the volume
+
+ private:
+  struct Job {
+    meshing::FrameMesh mesh;
+    Eigen::Isometry3d T_w_c;
+    meshing::PinholeIntrinsics K;
+  };
+  void run();
+  void integrateJob(const Job& job);
+
+  TsdfIntegratorConfig config_;
+  TsdfVolume volume_;
+  mutable std::mutex volume_mutex_;
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_, idle_cv_;
+  std::deque<Job> queue_;
+  bool busy_ = false;
+  bool stop_ = false;
+  TsdfIntegratorStats stats_;
+  std::thread worker_;
+};
+
+}  // namespace vitamin_e::fusion

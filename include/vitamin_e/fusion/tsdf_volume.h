@@ -1,0 +1,90 @@
+#pragma once
+// Voxel-hashed truncated signed distance field. Space is split into blocks of
+// block_voxels^3 voxels kept in a hash map keyed by the block index, allocated
+// on demand around observed surfaces. integrate() rasterises a frame's mesh
+// into a depth map (z-buffer, inverse depth interpolated linearly in the image,
+// exact for planar triangles), then updates every voxel of the blocks near the
+// surface with the projective signed distance along the ray, truncated, as a
+// running weighted average (weight capped at max_weight). extractMesh() runs
+// marching tetrahedra (each cube split into 6 tetrahedra around its main
+// diagonal: watertight, no ambiguous cases) on the blocks that changed since
+// the last call (and their lower neighbours, which read their voxels), reusing
+// the cached triangles of the other blocks; vertices are shared across cubes and
+// blocks, so a closed surface gives a closed mesh.
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "vitamin_e/fusion/triangle_mesh.h"
+#include "vitamin_e/meshing/frame_mesh.h"
+#include "vitamin_e/meshing/pinhole_intrinsics.h"
+
+namespace vitamin_e::fusion {
+
+struct TsdfConfig {
+  double voxel_size = 0.05;    // metres
+  double truncation = 0.15;    // metres, band half-width around the surface
+  double max_weight = 100.0;   // cap of the running weight
+  int block_voxels = 8;        // voxels per block side
+  double min_depth = 0.1;      // rasterised depths outside [min_depth, max_depth] are ignored
+  double max_depth = 20.0;
+  double min_extract_weight = 0.5;  // voxels lighter than this count as unobserved
+  int raster_downscale = 1;    // depth map at (width, height) / raster_downscale
+  void validate() const;       // throws std::invalid_argument naming the key
+};
+
+struct Voxel {
+  float sdf = 0.0f;     // metres, in [-truncation, truncation]; > 0 in front of the surface
+  float weight = 0.0f;  // 0: never observed
+};
+
+struct IntegrationStats {
+  std::size_t blocks_touched = 0;
+  std::size_t blocks_allocated = 0;
+  std::size_t voxels_updated = 0;
+  std::size_t pixels_with_depth = 0;
+};
+
+class TsdfVolume {
+ public:
+  explicit TsdfVolume(const TsdfConfig& config = {});
+  ~TsdfVolume();
+  TsdfVolume(TsdfVolume&&) noexcept;
+  TsdfVolume& operator=(TsdfVolume&&) noexcept;
+
+  // Integrates a frame mesh (vertices uv + inv_depth in the camera frame) seen
+  // from pose T_w_c.
+  IntegrationStats integrate(const meshing::FrameMesh& mesh, const Eigen::Isometry3d& T_w_c,
+                             const meshing::PinholeIntrinsics& K);
+  // Integrates a depth map directly (z along the optical axis, metres; 0 or
+  // non-finite: no measurement), CV-free: row-major width*height floats at the
+  // resolution of K.
+  IntegrationStats integrateDepth(const std::vector<float>& depth, const Eigen::Isometry3d& T_w_c,
+                                  const meshing::PinholeIntrinsics& K);
+  // Rasterises a mesh into a depth map (row-major, 0 where empty) of K's size.
+  static std::vector<float> rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeIntrinsics& K);
+
+  // The zero level set as a mesh; only blocks changed since the last call are re-meshed.
+  TriangleMesh extractMesh();
+  // Number of blocks re-meshed by the last extractMesh().
+  std::size_t lastRemeshedBlocks() const;
+
+  // Voxel at a world point (nullptr if its block is not allocated).
+  const Voxel* voxelAt(const Eigen::Vector3d& p_w) const;
+  // Sdf of the voxel containing p_w; false if unobserved.
+  bool sdfAt(const Eigen::Vector3d& p_w, double* sdf) const;
+  // All voxels (centre in world, value) with weight > 0, for tests and debugging.
+  void forEachVoxel(const std::function<void(const Eigen::Vector3d&, const Voxel&)>& fn) const;
+
+  std::size_t numBlocks() const;
+  void clear();
+  const TsdfConfig& config() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vitamin_e::fusion

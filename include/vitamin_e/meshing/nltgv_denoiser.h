@@ -1,0 +1,55 @@
+#pragma once
+// NLTGV2-L1 denoising of a FrameMesh's inverse depths (after Greene & Roy,
+// FLaME, ICCV 2017; non-local TGV of Ranftl et al.): every vertex i carries its
+// inverse depth xi_i and a 2D gradient w_i (per normalized image coordinate);
+// every directed mesh edge (i, j) penalises
+//   alpha * |xi_i - xi_j - w_i . (x_i - x_j)| + beta * |w_i - w_j|_1
+// (x = normalized coordinates), and every vertex lambda * |xi_i - z_i| (z: the
+// measured inverse depth). Piecewise-planar surfaces are flattened (affine
+// inverse depth = plane) while steps are kept. Solved with the diagonally
+// preconditioned primal-dual algorithm of Pock & Chambolle (2011).
+// Warm start: the previous call's solution is kept by track id (the relative
+// correction xi/z and the gradient) together with the edge duals.
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "vitamin_e/meshing/frame_mesh.h"
+
+namespace vitamin_e::meshing {
+
+struct NltgvConfig {
+  double alpha = 1.0;         // weight of the first-order (affine) term
+  double beta = 0.02;         // weight of the gradient smoothness term (normalized-coordinate units)
+  double lambda = 0.5;        // weight of the L1 data term
+  int iterations = 150;       // primal-dual iterations (cold start)
+  int warm_iterations = 60;   // iterations when most vertices were warm-started
+  double theta = 1.0;         // over-relaxation
+  bool warm_start = true;
+  void validate() const;      // throws std::invalid_argument naming the key
+};
+
+struct NltgvStats {
+  int iterations = 0;
+  std::size_t warm_started = 0;  // vertices initialised from the previous call
+  std::size_t edges = 0;
+};
+
+class NltgvDenoiser {
+ public:
+  explicit NltgvDenoiser(const NltgvConfig& config = {});
+  // Replaces mesh->vertices[i].inv_depth by the smoothed value (the data term
+  // is measured_inv_depth). Needs the intrinsics for normalized coordinates.
+  NltgvStats denoise(FrameMesh* mesh, const PinholeIntrinsics& K);
+  // Forgets the warm start.
+  void reset();
+  const NltgvConfig& config() const { return config_; }
+
+ private:
+  struct VertexState { double ratio; double wx, wy; };
+  NltgvConfig config_;
+  std::unordered_map<std::uint64_t, VertexState> prev_vertices_;
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> prev_duals_;  // key: hash of (id_i, id_j)
+};
+
+}  // namespace vitamin_e::meshing

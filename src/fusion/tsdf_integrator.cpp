@@ -1,0 +1,118 @@
+#include "vitamin_e/fusion/tsdf_integrator.h"
+
+#include <chrono>
+#include <stdexcept>
+
+namespace vitamin_e::fusion {
+
+void TsdfIntegratorConfig::validate() const {
+  tsdf.validate();
+  if (queue_capacity < 1) throw std::invalid_argument("tsdf_integrator.queue_capacity: must be >= 1");
+}
+
+TsdfIntegrator::TsdfIntegrator(const TsdfIntegratorConfig& config) : config_(config), volume_(config.tsdf) {
+  config_.validate();
+  if (config_.asynchronous) worker_ = std::thread([this] { run(); });
+}
+
+TsdfIntegrator::~TsdfIntegrator() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_ = true;
+  }
+  queue_cv_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+void TsdfIntegrator::integrateJob(const Job& job) {
+  const auto t0 = std::chrono::steady_clock::now();
+  {
+    std::lock_guard<std::mutex> lock(volume_mutex_);
+    volume_.integrate(job.mesh, job.T_w_c, job.K);
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  ++stats_.integrated;
+  stats_.last_integration_ms = ms;
+}
+
+void TsdfIntegrator::submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c,
+                            const meshing::PinholeIntrinsics& K) {
+  Job job{std::move(mesh), T_w_c, K};
+  if (!config_.asynchronous) {
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      ++stats_.submitted;
+    }
+    integrateJob(job);
+    return;
+  }
+  {
+    std::unique_lock<std::mutex> lock(queue_mutex_);
+    ++stats_.submitted;
+    if (queue_.size() >= config_.queue_capacity) {
+      if (config_.block_when_full) {
+        idle_cv_.wait(lock, [this] { return queue_.size() < config_.queue_capacity || stop_; });
+      } else {
+        queue_.pop_front();
+        ++stats_.dropped;
+      }
+    }
+    queue_.push_back(std::move(job));
+  }
+  queue_cv_.notify_one();
+}
+
+void TsdfIntegrator::run() {
+  for (;;) {
+    Job job;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (queue_.empty()) return;  // stop_ and nothing left
+      job = std::move(queue_.front());
+      queue_.pop_front();
+      busy_ = true;
+    }
+    idle_cv_.notify_all();
+    integrateJob(job);
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      busy_ = false;
+    }
+    idle_cv_.notify_all();
+  }
+}
+
+void TsdfIntegrator::flush() {
+  if (!config_.asynchronous) return;
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  idle_cv_.wait(lock, [this] { return queue_.empty() && !busy_; });
+}
+
+TriangleMesh TsdfIntegrator::extractMesh() {
+  std::lock_guard<std::mutex> lock(volume_mutex_);
+  return volume_.extractMesh();
+}
+
+bool TsdfIntegrator::saveMesh(const std::string& path, std::string* error) {
+  return saveMeshPly(extractMesh(), path, error);
+}
+
+TsdfIntegratorStats TsdfIntegrator::stats() const {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  return stats_;
+}
+
+void TsdfIntegrator::reset() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stats_.dropped += queue_.size();
+    queue_.clear();
+  }
+  flush();
+  std::lock_guard<std::mutex> lock(volume_mutex_);
+  volume_.clear();
+}
+
+}  // namespace vitamin_e::fusion

@@ -1,0 +1,233 @@
+// TsdfVolume: configuration, mesh rasterisation and projective integration.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "tsdf_impl.h"
+
+namespace vitamin_e::fusion {
+
+namespace {
+void require(bool ok, const char* key, const std::string& what) {
+  if (!ok) throw std::invalid_argument(std::string("tsdf.") + key + ": " + what);
+}
+
+// Intrinsics of a depth map downscaled by s (pixel centres at integer coordinates).
+meshing::PinholeIntrinsics scaled(const meshing::PinholeIntrinsics& K, int s) {
+  if (s == 1) return K;
+  meshing::PinholeIntrinsics k = K;
+  k.fx = K.fx / s;
+  k.fy = K.fy / s;
+  k.cx = (K.cx + 0.5) / s - 0.5;
+  k.cy = (K.cy + 0.5) / s - 0.5;
+  k.width = (K.width + s - 1) / s;
+  k.height = (K.height + s - 1) / s;
+  return k;
+}
+
+// Z-buffered rasterisation of the mesh into an inverse-depth image of size (w, h);
+// uv are scaled by `scale` first. Inverse depth is affine over a planar triangle
+// in the image, so linear interpolation is exact for planar faces.
+std::vector<float> rasterize(const meshing::FrameMesh& mesh, double scale, double offset, int w, int h) {
+  std::vector<float> inv(static_cast<std::size_t>(w) * h, 0.0f);
+  std::vector<Eigen::Vector2d> uv(mesh.vertices.size());
+  for (std::size_t i = 0; i < uv.size(); ++i)
+    uv[i] = (mesh.vertices[i].uv.array() + offset) * scale - offset;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector2d& a = uv[t[0]];
+    const Eigen::Vector2d& b = uv[t[1]];
+    const Eigen::Vector2d& c = uv[t[2]];
+    const double area = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+    if (std::abs(area) < 1e-12) continue;
+    const double za = mesh.vertices[t[0]].inv_depth, zb = mesh.vertices[t[1]].inv_depth,
+                 zc = mesh.vertices[t[2]].inv_depth;
+    const int x0 = std::max(0, static_cast<int>(std::ceil(std::min({a.x(), b.x(), c.x()}))));
+    const int x1 = std::min(w - 1, static_cast<int>(std::floor(std::max({a.x(), b.x(), c.x()}))));
+    const int y0 = std::max(0, static_cast<int>(std::ceil(std::min({a.y(), b.y(), c.y()}))));
+    const int y1 = std::min(h - 1, static_cast<int>(std::floor(std::max({a.y(), b.y(), c.y()}))));
+    const double inv_area = 1.0 / area;
+    const double eps = -1e-9;
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        // Barycentric weights of (x, y).
+        const double l0 = ((b.x() - x) * (c.y() - y) - (b.y() - y) * (c.x() - x)) * inv_area;
+        const double l1 = ((c.x() - x) * (a.y() - y) - (c.y() - y) * (a.x() - x)) * inv_area;
+        const double l2 = 1.0 - l0 - l1;
+        if (l0 < eps || l1 < eps || l2 < eps) continue;
+        const float z = static_cast<float>(l0 * za + l1 * zb + l2 * zc);
+        float& dst = inv[static_cast<std::size_t>(y) * w + x];
+        if (z > dst) dst = z;
+      }
+    }
+  }
+  return inv;
+}
+}  // namespace
+
+void TsdfConfig::validate() const {
+  require(voxel_size > 0.0, "voxel_size", "must be > 0");
+  require(truncation >= voxel_size, "truncation", "must be >= voxel_size");
+  require(max_weight >= 1.0, "max_weight", "must be >= 1");
+  require(block_voxels >= 2 && block_voxels <= 64, "block_voxels", "must be in [2, 64]");
+  require(min_depth > 0.0, "min_depth", "must be > 0");
+  require(max_depth > min_depth, "max_depth", "must be > min_depth");
+  require(min_extract_weight > 0.0, "min_extract_weight", "must be > 0");
+  require(raster_downscale >= 1 && raster_downscale <= 16, "raster_downscale", "must be in [1, 16]");
+}
+
+TsdfVolume::TsdfVolume(const TsdfConfig& config) : impl_(std::make_unique<Impl>()) {
+  config.validate();
+  impl_->config = config;
+}
+TsdfVolume::~TsdfVolume() = default;
+TsdfVolume::TsdfVolume(TsdfVolume&&) noexcept = default;
+TsdfVolume& TsdfVolume::operator=(TsdfVolume&&) noexcept = default;
+
+const TsdfConfig& TsdfVolume::config() const { return impl_->config; }
+std::size_t TsdfVolume::numBlocks() const { return impl_->blocks.size(); }
+std::size_t TsdfVolume::lastRemeshedBlocks() const { return impl_->last_remeshed; }
+void TsdfVolume::clear() { impl_->blocks.clear(); }
+
+std::vector<float> TsdfVolume::rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeIntrinsics& K) {
+  std::vector<float> d = rasterize(mesh, 1.0, 0.0, K.width, K.height);
+  for (float& v : d) v = v > 0.0f ? 1.0f / v : 0.0f;
+  return d;
+}
+
+IntegrationStats TsdfVolume::integrate(const meshing::FrameMesh& mesh, const Eigen::Isometry3d& T_w_c,
+                                       const meshing::PinholeIntrinsics& K) {
+  const int s = impl_->config.raster_downscale;
+  const meshing::PinholeIntrinsics k = scaled(K, s);
+  std::vector<float> d = rasterize(mesh, 1.0 / s, 0.5, k.width, k.height);
+  for (float& v : d) v = v > 0.0f ? 1.0f / v : 0.0f;
+  return integrateDepth(d, T_w_c, k);
+}
+
+IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth, const Eigen::Isometry3d& T_w_c,
+                                            const meshing::PinholeIntrinsics& K) {
+  K.validate();
+  if (depth.size() != static_cast<std::size_t>(K.width) * K.height)
+    throw std::invalid_argument("TsdfVolume::integrateDepth: depth size != width * height");
+  const TsdfConfig& cfg = impl_->config;
+  IntegrationStats stats;
+  const int W = K.width, H = K.height, n = cfg.block_voxels;
+  const double vs = cfg.voxel_size, bs = impl_->blockSize(), trunc = cfg.truncation;
+
+  // 1. Blocks within the truncation band of some measured pixel.
+  float max_d = 0.0f;
+  for (float v : depth)
+    if (v >= cfg.min_depth && v <= cfg.max_depth) {
+      max_d = std::max(max_d, v);
+      ++stats.pixels_with_depth;
+    }
+  if (stats.pixels_with_depth == 0) return stats;
+  const int stride = std::clamp(static_cast<int>(bs * std::min(K.fx, K.fy) / (2.0 * max_d)), 1, 16);
+  std::vector<std::uint64_t> keys;
+  for (int y = 0; y < H; y += stride) {
+    for (int x = 0; x < W; x += stride) {
+      const float z = depth[static_cast<std::size_t>(y) * W + x];
+      if (!(z >= cfg.min_depth && z <= cfg.max_depth)) continue;
+      const Eigen::Vector3d ray = K.ray(Eigen::Vector2d(x, y));
+      const double len = ray.norm();
+      const double r0 = z * len - trunc, r1 = z * len + trunc;  // range along the unit ray
+      const Eigen::Vector3d dir_w = T_w_c.linear() * (ray / len);
+      const int steps = static_cast<int>(std::ceil((r1 - r0) / (0.5 * bs)));
+      for (int i = 0; i <= steps; ++i) {
+        const double r = std::min(r1, r0 + i * 0.5 * bs);
+        const Eigen::Vector3d p = T_w_c.translation() + dir_w * r;
+        keys.push_back(packIndex((p / bs).array().floor().cast<int>().matrix()));
+      }
+    }
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+
+  // 2. Projective update of every voxel of those blocks.
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+  const Eigen::Matrix3d R = T_c_w.linear();
+  const Eigen::Vector3d dx = R.col(0) * vs, dy = R.col(1) * vs, dz = R.col(2) * vs;
+  const float max_w = static_cast<float>(cfg.max_weight);
+  for (std::uint64_t key : keys) {
+    const Eigen::Vector3i b = unpackIndex(key);
+    auto& slot = impl_->blocks[key];
+    bool fresh = false;
+    if (!slot) {
+      slot = std::make_unique<Block>();
+      slot->voxels.resize(static_cast<std::size_t>(n) * n * n);
+      fresh = true;
+    }
+    Block& block = *slot;
+    const Eigen::Vector3d origin_w = ((b * n).cast<double>().array() + 0.5).matrix() * vs;
+    const Eigen::Vector3d origin_c = T_c_w * origin_w;
+    std::size_t updated = 0;
+    for (int iz = 0; iz < n; ++iz) {
+      for (int iy = 0; iy < n; ++iy) {
+        Eigen::Vector3d p = origin_c + iy * dy + iz * dz;
+        Voxel* vox = &block.voxels[static_cast<std::size_t>(n) * (iy + n * iz)];
+        for (int ix = 0; ix < n; ++ix, p += dx, ++vox) {
+          if (p.z() < cfg.min_depth) continue;
+          const double inv_z = 1.0 / p.z();
+          const int u = static_cast<int>(std::lround(K.fx * p.x() * inv_z + K.cx));
+          const int v = static_cast<int>(std::lround(K.fy * p.y() * inv_z + K.cy));
+          if (u < 0 || v < 0 || u >= W || v >= H) continue;
+          const float zm = depth[static_cast<std::size_t>(v) * W + u];
+          if (!(zm >= cfg.min_depth && zm <= cfg.max_depth)) continue;
+          // Signed distance along the ray (positive in front of the surface).
+          const double sdf = (zm - p.z()) * p.norm() * inv_z;
+          if (sdf < -trunc) continue;
+          const float f = static_cast<float>(std::min(sdf, trunc));
+          const float w = vox->weight;
+          vox->sdf = (vox->sdf * w + f) / (w + 1.0f);
+          vox->weight = std::min(w + 1.0f, max_w);
+          ++updated;
+        }
+      }
+    }
+    if (updated > 0) block.dirty = true;
+    if (fresh && updated == 0) {
+      impl_->blocks.erase(key);
+      continue;
+    }
+    stats.blocks_allocated += fresh;
+    ++stats.blocks_touched;
+    stats.voxels_updated += updated;
+  }
+  return stats;
+}
+
+const Voxel* TsdfVolume::voxelAt(const Eigen::Vector3d& p_w) const {
+  const int n = impl_->config.block_voxels;
+  const Eigen::Vector3i g = (p_w / impl_->config.voxel_size).array().floor().cast<int>();
+  const Eigen::Vector3i b(static_cast<int>(std::floor(static_cast<double>(g.x()) / n)),
+                          static_cast<int>(std::floor(static_cast<double>(g.y()) / n)),
+                          static_cast<int>(std::floor(static_cast<double>(g.z()) / n)));
+  const Block* block = impl_->find(b);
+  if (!block) return nullptr;
+  const Eigen::Vector3i l = g - b * n;
+  return &block->voxels[static_cast<std::size_t>(l.x() + n * (l.y() + n * l.z()))];
+}
+
+bool TsdfVolume::sdfAt(const Eigen::Vector3d& p_w, double* sdf) const {
+  const Voxel* v = voxelAt(p_w);
+  if (!v || v->weight <= 0.0f) return false;
+  *sdf = v->sdf;
+  return true;
+}
+
+void TsdfVolume::forEachVoxel(const std::function<void(const Eigen::Vector3d&, const Voxel&)>& fn) const {
+  const int n = impl_->config.block_voxels;
+  const double vs = impl_->config.voxel_size;
+  for (const auto& [key, block] : impl_->blocks) {
+    const Eigen::Vector3i b = unpackIndex(key);
+    for (int z = 0; z < n; ++z)
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+          const Voxel& v = block->voxels[static_cast<std::size_t>(x + n * (y + n * z))];
+          if (v.weight <= 0.0f) continue;
+          fn(((b * n + Eigen::Vector3i(x, y, z)).cast<double>().array() + 0.5).matrix() * vs, v);
+        }
+  }
+}
+
+}  // namespace vitamin_e::fusion
