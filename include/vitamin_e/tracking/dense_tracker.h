@@ -1,0 +1,100 @@
+#pragma once
+// Dense curvature-extrema tracking front end (VITAMIN-E, CVPR 2019, section 2).
+//
+// Per frame: (1) curvature image kappa = fy^2 fxx - 2 fx fy fxy + fx^2 fyy of a
+// lightly smoothed float image; (2) dominant flow y = A x + b from BRIEF matches
+// on the image shrunk to `brief_scale`, fitted by IRLS with the Geman-McClure
+// kernel; (3) every live point is predicted with the flow and moved by hill
+// climbing F = s*kappa(x) + lambda * w(|x - x_bar|) (s = the point's curvature
+// sign, w = 1 - rho) to a local maximum, refined to sub-pixel precision and
+// checked forward-backward on the previous curvature image; (4) new extrema are
+// spawned in grid cells that lost their points. Curvature is normalized by a
+// robust per-frame scale (median |kappa|) so that lambda and the thresholds mean
+// the same under exposure changes.
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace vitamin_e::tracking {
+
+struct TrackerConfig {
+  // --- detection ---
+  int max_points = 8000;            // upper bound on live points per frame (> 0)
+  int grid_cell_px = 8;             // bucketing cell size [px]; new points go to under-filled cells
+  int max_per_cell = 2;             // live points allowed per cell (>= 1)
+  int nms_radius_px = 2;            // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
+  int border_px = 8;                // no point closer than this to the image border (>= 2)
+  double smoothing_sigma = 1.0;     // Gaussian pre-smoothing before derivatives [px] (0 = none)
+  double min_curvature = 1.0;       // detection threshold on |kappa| / median|kappa| (>= 0)
+  double min_abs_curvature = 0.5;   // absolute floor on |kappa| [DN^3/px^4]; flat/black images give nothing
+  // --- dominant flow (BRIEF on a shrunk image + Geman-McClure affine fit) ---
+  double brief_scale = 1.0 / 6.0;   // shrink factor of the matching image, (0, 1]
+  int brief_max_keypoints = 400;    // strongest curvature extrema of the small image described
+  int brief_patch_size = 15;        // side of the BRIEF test window in the small image [px], odd >= 7
+  int brief_max_distance = 70;      // max Hamming distance of an accepted match (of 256)
+  double brief_ratio = 0.9;         // best/second-best distance ratio test, (0, 1]; matches are also cross-checked
+  double flow_sigma_px = 3.0;       // final Geman-McClure sigma of the affine fit [full-res px] (> 0)
+  double flow_sigma_start_px = 30.0;// annealing starts here and halves down to flow_sigma_px (>= flow_sigma_px)
+  int flow_iterations = 5;          // IRLS iterations per annealing level (>= 1)
+  int flow_min_matches = 8;         // fewer inliers than this: flow_ok = false, identity + previous b used
+  // --- extrema tracking ---
+  double lambda = 2.0;              // weight of the prediction prior in F, in normalized-curvature units (>= 0)
+  double track_sigma_px = 3.0;      // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
+  int max_climb_steps = 12;         // hill-climbing steps (8-neighbour moves) before giving up (>= 1)
+  double fb_threshold_px = 1.0;     // forward-backward check: max distance back to the old position [px] (> 0)
+  double min_track_curvature = 0.5; // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
+  // --- execution ---
+  int threads = 2;                  // stripes run in parallel (cv::parallel_for_); 1 = serial (>= 1)
+
+  // Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+};
+
+struct TrackedPoint {
+  std::uint64_t id = 0;             // stable while the point is tracked
+  Eigen::Vector2f uv = Eigen::Vector2f::Zero();  // sub-pixel position in the input (distorted) image
+  int age = 0;                      // frames tracked before this one (0 = detected in this frame)
+  float curvature = 0.f;            // normalized kappa at uv (sign tells min/max)
+  std::uint8_t intensity = 0;       // input image intensity at the nearest pixel
+};
+
+struct TrackerFrame {
+  double timestamp = 0;
+  std::vector<TrackedPoint> points;  // all live points of this frame (tracked first, then new)
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();  // dominant flow prev -> cur: y = A x + b
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  bool flow_ok = false;              // the affine fit had >= flow_min_matches inliers
+  int flow_matches = 0;              // BRIEF matches used by the fit (after cross-check/ratio)
+  int num_tracked = 0, num_new = 0, num_lost = 0;
+  std::map<std::string, double> timing_ms;  // "curvature", "flow", "track", "detect", "total"
+};
+
+class DenseTracker {
+ public:
+  explicit DenseTracker(const TrackerConfig& config = {});  // validates config
+  ~DenseTracker();
+  DenseTracker(DenseTracker&&) noexcept;
+  DenseTracker& operator=(DenseTracker&&) noexcept;
+
+  // CV_8UC1 image of any size (>= 2*border_px+3 on each side); throws
+  // std::invalid_argument on other types or an empty image. An image whose size
+  // differs from the previous one restarts tracking (all points new).
+  TrackerFrame track(const cv::Mat& gray, double timestamp);
+  // The back end removes outlier tracks: they are not tracked further and their
+  // cells are refilled with new points on the next frame. Unknown ids are ignored.
+  void dropTracks(const std::vector<std::uint64_t>& ids);
+  // Forgets all points and the previous frame; ids keep increasing.
+  void reset();
+  const TrackerConfig& config() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vitamin_e::tracking

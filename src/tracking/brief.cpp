@@ -1,0 +1,123 @@
+#include "vitamin_e/tracking/brief.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <stdexcept>
+
+namespace vitamin_e::tracking {
+namespace {
+
+// splitmix64: a small, platform-independent generator so that the test pattern
+// is identical everywhere (std:: distributions are not).
+struct SplitMix {
+  std::uint64_t s;
+  std::uint64_t next() {
+    std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return (next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+  double gauss() {  // Box-Muller
+    const double u1 = std::max(uniform(), 1e-12), u2 = uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+  }
+};
+
+}  // namespace
+
+BriefExtractor::BriefExtractor(int patch_size, std::uint32_t seed) : patch_size_(patch_size) {
+  if (patch_size < 5 || patch_size % 2 == 0) {
+    throw std::invalid_argument("BriefExtractor: patch_size must be odd and >= 5");
+  }
+  const int r = patch_size / 2;
+  const double sigma = patch_size / 5.0;
+  SplitMix rng{seed};
+  auto draw = [&]() {
+    const long v = std::lround(rng.gauss() * sigma);
+    return static_cast<int>(std::clamp<long>(v, -r, r));
+  };
+  pairs_.reserve(256);
+  while (pairs_.size() < 256) {
+    std::array<int, 4> p{draw(), draw(), draw(), draw()};
+    if (p[0] == p[2] && p[1] == p[3]) continue;  // a test against itself carries no information
+    pairs_.push_back(p);
+  }
+}
+
+bool BriefExtractor::describe(const cv::Mat& img, int x, int y, BriefDescriptor* d) const {
+  const int r = radius();
+  if (x < r || y < r || x >= img.cols - r || y >= img.rows - r) return false;
+  d->bits.fill(0);
+  if (img.type() == CV_32FC1) {
+    for (int i = 0; i < 256; ++i) {
+      const auto& p = pairs_[i];
+      const float a = img.ptr<float>(y + p[1])[x + p[0]];
+      const float b = img.ptr<float>(y + p[3])[x + p[2]];
+      if (a < b) d->bits[i >> 6] |= (1ull << (i & 63));
+    }
+  } else if (img.type() == CV_8UC1) {
+    for (int i = 0; i < 256; ++i) {
+      const auto& p = pairs_[i];
+      if (img.ptr<std::uint8_t>(y + p[1])[x + p[0]] < img.ptr<std::uint8_t>(y + p[3])[x + p[2]]) {
+        d->bits[i >> 6] |= (1ull << (i & 63));
+      }
+    }
+  } else {
+    throw std::invalid_argument("BriefExtractor::describe: image must be CV_32FC1 or CV_8UC1");
+  }
+  return true;
+}
+
+namespace {
+
+struct Best {
+  int idx = -1;
+  int d1 = INT_MAX;
+  int d2 = INT_MAX;
+};
+
+std::vector<Best> bestMatches(const std::vector<BriefDescriptor>& a, const std::vector<BriefDescriptor>& b,
+                              const std::vector<signed char>* sa, const std::vector<signed char>* sb) {
+  std::vector<Best> best(a.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    Best& bi = best[i];
+    for (size_t j = 0; j < b.size(); ++j) {
+      if (sa && sb && (*sa)[i] != (*sb)[j]) continue;
+      const int d = hammingDistance(a[i], b[j]);
+      if (d < bi.d1) {
+        bi.d2 = bi.d1;
+        bi.d1 = d;
+        bi.idx = static_cast<int>(j);
+      } else if (d < bi.d2) {
+        bi.d2 = d;
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> matchBrief(const std::vector<BriefDescriptor>& a,
+                                            const std::vector<BriefDescriptor>& b, const MatchConfig& c,
+                                            const std::vector<signed char>* sign_a,
+                                            const std::vector<signed char>* sign_b) {
+  std::vector<std::pair<int, int>> out;
+  if (a.empty() || b.empty()) return out;
+  const bool use_sign = sign_a && sign_b && sign_a->size() == a.size() && sign_b->size() == b.size();
+  const auto ab = bestMatches(a, b, use_sign ? sign_a : nullptr, use_sign ? sign_b : nullptr);
+  std::vector<Best> ba;
+  if (c.cross_check) ba = bestMatches(b, a, use_sign ? sign_b : nullptr, use_sign ? sign_a : nullptr);
+  for (size_t i = 0; i < a.size(); ++i) {
+    const Best& m = ab[i];
+    if (m.idx < 0 || m.d1 > c.max_distance) continue;
+    if (c.ratio < 1.0 && m.d2 != INT_MAX && m.d1 >= c.ratio * m.d2) continue;
+    if (c.cross_check && ba[m.idx].idx != static_cast<int>(i)) continue;
+    out.emplace_back(static_cast<int>(i), m.idx);
+  }
+  return out;
+}
+
+}  // namespace vitamin_e::tracking

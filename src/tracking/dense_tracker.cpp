@@ -1,0 +1,346 @@
+#include "vitamin_e/tracking/dense_tracker.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+#include "vitamin_e/tracking/affine_flow.h"
+#include "vitamin_e/tracking/brief.h"
+#include "vitamin_e/tracking/curvature.h"
+
+namespace vitamin_e::tracking {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+struct Track {
+  std::uint64_t id = 0;
+  Eigen::Vector2f uv = Eigen::Vector2f::Zero();
+  int age = 0;
+  float sign = 1.f;
+};
+
+// Result of tracking one point into the current frame.
+struct Step {
+  Eigen::Vector2f uv;
+  Eigen::Vector2i px;
+  float kappa = 0.f;
+  bool ok = false;
+};
+
+// Keypoints and descriptors of the shrunk image, positions in full-res pixels.
+struct SmallFeatures {
+  std::vector<Eigen::Vector2d> pos;
+  std::vector<BriefDescriptor> desc;
+  std::vector<signed char> sign;
+};
+
+}  // namespace
+
+struct DenseTracker::Impl {
+  TrackerConfig cfg;
+  BriefExtractor brief;
+  std::uint64_t next_id = 1;
+  bool has_prev = false;
+  cv::Size size;
+  cv::Mat prev_kappa, kappa;
+  float prev_scale = 0.f;
+  SmallFeatures prev_small, small;
+  std::vector<Track> tracks, next_tracks;
+  std::vector<Step> steps;
+  cv::Mat owner;    // CV_32SC1: index+1 of the surviving track at a pixel, 0 = none
+  cv::Mat blocked;  // CV_8UC1: 1 within nms radius of a surviving track
+  std::vector<Extremum> cands;
+  std::vector<int> cell_count, cell_slots;
+
+  explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
+
+  void smallFeatures(const cv::Mat& gray, SmallFeatures* out) const;
+  void trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale);
+  int detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh);
+};
+
+void DenseTracker::Impl::smallFeatures(const cv::Mat& gray, SmallFeatures* out) const {
+  out->pos.clear();
+  out->desc.clear();
+  out->sign.clear();
+  const int sw = std::max(1, static_cast<int>(std::lround(gray.cols * cfg.brief_scale)));
+  const int sh = std::max(1, static_cast<int>(std::lround(gray.rows * cfg.brief_scale)));
+  const int r = brief.radius();
+  if (sw <= 2 * r + 4 || sh <= 2 * r + 4) return;
+  cv::Mat small, ks, smoothed;
+  cv::resize(gray, small, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
+  computeCurvature(small, 1.0, &ks, 1, &smoothed);
+  const float scale = robustCurvatureScale(ks, 1);
+  if (scale <= 0.f) return;
+  std::vector<Extremum> ex;
+  detectExtrema(ks, 1, std::max(scale * static_cast<float>(cfg.min_curvature), 1e-6f), r + 1, &ex, 1);
+  if (static_cast<int>(ex.size()) > cfg.brief_max_keypoints) {
+    std::nth_element(ex.begin(), ex.begin() + cfg.brief_max_keypoints, ex.end(),
+                     [](const Extremum& a, const Extremum& b) { return std::fabs(a.kappa) > std::fabs(b.kappa); });
+    ex.resize(cfg.brief_max_keypoints);
+  }
+  const double fx = static_cast<double>(gray.cols) / sw, fy = static_cast<double>(gray.rows) / sh;
+  for (const Extremum& e : ex) {
+    BriefDescriptor d;
+    if (!brief.describe(smoothed, e.x, e.y, &d)) continue;
+    const float s = e.kappa > 0.f ? 1.f : -1.f;
+    const Eigen::Vector2f p = refineSubpixel(ks, Eigen::Vector2i(e.x, e.y), s);
+    out->pos.emplace_back((p.x() + 0.5) * fx - 0.5, (p.y() + 0.5) * fy - 0.5);
+    out->desc.push_back(d);
+    out->sign.push_back(static_cast<signed char>(s));
+  }
+}
+
+void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale) {
+  const Eigen::Matrix2f Af = A.cast<float>();
+  const Eigen::Vector2f bf = b.cast<float>();
+  const Eigen::Matrix2d Ainv_d =
+      std::fabs(A.determinant()) > 1e-6 ? Eigen::Matrix2d(A.inverse()) : Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2f Ainv = Ainv_d.cast<float>();
+  const float sigma2 = static_cast<float>(cfg.track_sigma_px * cfg.track_sigma_px);
+  const float fb2 = static_cast<float>(cfg.fb_threshold_px * cfg.fb_threshold_px);
+  const float min_k = std::max(static_cast<float>(cfg.min_track_curvature) * scale,
+                               static_cast<float>(cfg.min_abs_curvature));
+  steps.resize(tracks.size());
+  auto work = [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const Track& t = tracks[i];
+      Step& s = steps[i];
+      s.ok = false;
+      ClimbParams fwd{t.sign, static_cast<float>(cfg.lambda) * scale, sigma2, cfg.max_climb_steps, 2};
+      const Eigen::Vector2f pred = Af * t.uv + bf;
+      if (!hillClimb(kappa, pred, fwd, &s.px)) continue;
+      s.kappa = kappa.ptr<float>(s.px.y())[s.px.x()];
+      if (t.sign * s.kappa < min_k) continue;
+      s.uv = refineSubpixel(kappa, s.px, t.sign);
+      // Backward: climb the previous curvature from the inverse prediction.
+      ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
+      Eigen::Vector2i q;
+      if (!hillClimb(prev_kappa, Ainv * (s.uv - bf), bwd, &q)) continue;
+      const Eigen::Vector2f qs = refineSubpixel(prev_kappa, q, t.sign);
+      s.ok = (qs - t.uv).squaredNorm() <= fb2;
+    }
+  };
+  const int n = static_cast<int>(tracks.size());
+  const int stripes = cfg.threads > 1 && n > 256 ? cfg.threads * 4 : 1;
+  if (stripes == 1) {
+    work(0, n);
+  } else {
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
+      for (int s = r.start; s < r.end; ++s) work(n * s / stripes, n * (s + 1) / stripes);
+    }, stripes);
+  }
+}
+
+int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh) {
+  fresh->clear();
+  const int room = cfg.max_points - static_cast<int>(next_tracks.size());
+  if (room <= 0 || scale <= 0.f) return 0;
+  const float thr = std::max(static_cast<float>(cfg.min_curvature) * scale, static_cast<float>(cfg.min_abs_curvature));
+  detectExtrema(kappa, cfg.nms_radius_px, thr, cfg.border_px, &cands, cfg.threads);
+  const int cs = cfg.grid_cell_px, k = cfg.max_per_cell;
+  const int gw = (gray.cols + cs - 1) / cs, gh = (gray.rows + cs - 1) / cs;
+  cell_count.assign(static_cast<size_t>(gw) * gh, 0);
+  cell_slots.assign(static_cast<size_t>(gw) * gh * k, -1);
+  for (const Track& t : next_tracks) {
+    const int x = static_cast<int>(std::lround(t.uv.x())), y = static_cast<int>(std::lround(t.uv.y()));
+    ++cell_count[(y / cs) * gw + x / cs];
+  }
+  for (int i = 0; i < static_cast<int>(cands.size()); ++i) {
+    const Extremum& e = cands[i];
+    if (blocked.ptr<std::uint8_t>(e.y)[e.x]) continue;
+    const int c = (e.y / cs) * gw + e.x / cs;
+    const int free_slots = k - cell_count[c];
+    if (free_slots <= 0) continue;
+    int* slots = &cell_slots[static_cast<size_t>(c) * k];
+    // Keep the `free_slots` strongest candidates of the cell.
+    int weakest = -1;
+    for (int j = 0; j < free_slots; ++j) {
+      if (slots[j] < 0) { weakest = j; break; }
+      if (weakest < 0 || std::fabs(cands[slots[j]].kappa) < std::fabs(cands[slots[weakest]].kappa)) weakest = j;
+    }
+    if (slots[weakest] < 0 || std::fabs(cands[slots[weakest]].kappa) < std::fabs(e.kappa)) slots[weakest] = i;
+  }
+  std::vector<int> chosen;
+  chosen.reserve(cell_slots.size());
+  for (int s : cell_slots) if (s >= 0) chosen.push_back(s);
+  if (static_cast<int>(chosen.size()) > room) {
+    std::nth_element(chosen.begin(), chosen.begin() + room, chosen.end(), [&](int a, int b) {
+      return std::fabs(cands[a].kappa) > std::fabs(cands[b].kappa);
+    });
+    chosen.resize(room);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  fresh->reserve(chosen.size());
+  for (int i : chosen) {
+    const Extremum& e = cands[i];
+    Track t;
+    t.id = next_id++;
+    t.sign = e.kappa > 0.f ? 1.f : -1.f;
+    t.uv = refineSubpixel(kappa, Eigen::Vector2i(e.x, e.y), t.sign);
+    t.age = 0;
+    fresh->push_back(t);
+  }
+  return static_cast<int>(fresh->size());
+}
+
+DenseTracker::DenseTracker(const TrackerConfig& config) {
+  config.validate();
+  impl_ = std::make_unique<Impl>(config);
+}
+DenseTracker::~DenseTracker() = default;
+DenseTracker::DenseTracker(DenseTracker&&) noexcept = default;
+DenseTracker& DenseTracker::operator=(DenseTracker&&) noexcept = default;
+
+const TrackerConfig& DenseTracker::config() const { return impl_->cfg; }
+
+void DenseTracker::reset() {
+  impl_->has_prev = false;
+  impl_->tracks.clear();
+  impl_->prev_small = SmallFeatures{};
+}
+
+void DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
+  if (ids.empty()) return;
+  std::vector<std::uint64_t> sorted(ids);
+  std::sort(sorted.begin(), sorted.end());
+  auto& tr = impl_->tracks;
+  tr.erase(std::remove_if(tr.begin(), tr.end(),
+                          [&](const Track& t) { return std::binary_search(sorted.begin(), sorted.end(), t.id); }),
+           tr.end());
+}
+
+TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
+  if (gray.empty()) throw std::invalid_argument("DenseTracker::track: empty image");
+  if (gray.type() != CV_8UC1) throw std::invalid_argument("DenseTracker::track: image must be CV_8UC1");
+  Impl& m = *impl_;
+  const TrackerConfig& cfg = m.cfg;
+  if (gray.cols < 2 * cfg.border_px + 3 || gray.rows < 2 * cfg.border_px + 3) {
+    throw std::invalid_argument("DenseTracker::track: image smaller than 2*border_px+3");
+  }
+  const auto t_all = Clock::now();
+  TrackerFrame out;
+  out.timestamp = timestamp;
+  if (m.has_prev && gray.size() != m.size) reset();
+  m.size = gray.size();
+
+  auto t = Clock::now();
+  computeCurvature(gray, cfg.smoothing_sigma, &m.kappa, cfg.threads);
+  const float scale = robustCurvatureScale(m.kappa);
+  out.timing_ms["curvature"] = msSince(t);
+
+  // Dominant flow from BRIEF matches on the shrunk image.
+  t = Clock::now();
+  m.smallFeatures(gray, &m.small);
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();  // no flow: identity
+  if (m.has_prev) {
+    MatchConfig mc{cfg.brief_max_distance, cfg.brief_ratio, true};
+    const auto pairs = matchBrief(m.prev_small.desc, m.small.desc, mc, &m.prev_small.sign, &m.small.sign);
+    std::vector<Eigen::Vector2d> xs, ys;
+    xs.reserve(pairs.size());
+    ys.reserve(pairs.size());
+    for (const auto& p : pairs) {
+      xs.push_back(m.prev_small.pos[p.first]);
+      ys.push_back(m.small.pos[p.second]);
+    }
+    out.flow_matches = static_cast<int>(pairs.size());
+    AffineFitConfig fc{cfg.flow_sigma_start_px, cfg.flow_sigma_px, cfg.flow_iterations, cfg.flow_min_matches};
+    const AffineFit fit = fitAffineGemanMcClure(xs, ys, fc);
+    if (fit.ok) {
+      A = fit.A;
+      b = fit.b;
+      out.flow_ok = true;
+    }
+  }
+  out.A = A;
+  out.b = b;
+  out.timing_ms["flow"] = msSince(t);
+
+  // Extrema tracking.
+  t = Clock::now();
+  m.next_tracks.clear();
+  if (m.owner.size() != gray.size()) {
+    m.owner = cv::Mat::zeros(gray.size(), CV_32SC1);
+    m.blocked = cv::Mat::zeros(gray.size(), CV_8UC1);
+  }
+  if (m.has_prev && !m.tracks.empty() && scale > 0.f) {
+    m.trackAll(A, b, scale);
+    // Two tracks on one pixel: keep the older one.
+    for (size_t i = 0; i < m.tracks.size(); ++i) {
+      if (!m.steps[i].ok) continue;
+      int& o = m.owner.ptr<int>(m.steps[i].px.y())[m.steps[i].px.x()];
+      if (o == 0) {
+        o = static_cast<int>(i) + 1;
+      } else if (m.tracks[i].age > m.tracks[o - 1].age) {
+        m.steps[o - 1].ok = false;
+        o = static_cast<int>(i) + 1;
+      } else {
+        m.steps[i].ok = false;
+      }
+    }
+    for (size_t i = 0; i < m.tracks.size(); ++i) {
+      const Step& s = m.steps[i];
+      if (s.px.x() >= 0 && s.px.y() >= 0 && s.px.x() < gray.cols && s.px.y() < gray.rows) {
+        m.owner.ptr<int>(s.px.y())[s.px.x()] = 0;
+      }
+      if (!s.ok) continue;
+      Track tr = m.tracks[i];
+      tr.uv = s.uv;
+      tr.age += 1;
+      m.next_tracks.push_back(tr);
+    }
+  }
+  out.num_lost = static_cast<int>(m.tracks.size() - m.next_tracks.size());
+  out.num_tracked = static_cast<int>(m.next_tracks.size());
+  out.timing_ms["track"] = msSince(t);
+
+  // New extrema where the grid has room.
+  t = Clock::now();
+  const int r = cfg.nms_radius_px;
+  auto markBlocked = [&](std::uint8_t v) {
+    for (const Track& tr : m.next_tracks) {
+      const int x = static_cast<int>(std::lround(tr.uv.x())), y = static_cast<int>(std::lround(tr.uv.y()));
+      for (int yy = std::max(0, y - r); yy <= std::min(gray.rows - 1, y + r); ++yy) {
+        std::uint8_t* row = m.blocked.ptr<std::uint8_t>(yy);
+        for (int xx = std::max(0, x - r); xx <= std::min(gray.cols - 1, x + r); ++xx) row[xx] = v;
+      }
+    }
+  };
+  markBlocked(1);
+  std::vector<Track> fresh;
+  out.num_new = m.detect(gray, scale, &fresh);
+  markBlocked(0);
+  m.next_tracks.insert(m.next_tracks.end(), fresh.begin(), fresh.end());
+  out.timing_ms["detect"] = msSince(t);
+
+  const float inv_scale = scale > 0.f ? 1.f / scale : 0.f;
+  out.points.reserve(m.next_tracks.size());
+  for (const Track& tr : m.next_tracks) {
+    TrackedPoint p;
+    p.id = tr.id;
+    p.uv = tr.uv;
+    p.age = tr.age;
+    const int x = std::clamp(static_cast<int>(std::lround(tr.uv.x())), 0, gray.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(tr.uv.y())), 0, gray.rows - 1);
+    p.curvature = m.kappa.ptr<float>(y)[x] * inv_scale;
+    p.intensity = gray.ptr<std::uint8_t>(y)[x];
+    out.points.push_back(p);
+  }
+
+  std::swap(m.tracks, m.next_tracks);
+  std::swap(m.prev_kappa, m.kappa);
+  std::swap(m.prev_small, m.small);
+  m.prev_scale = scale;
+  m.has_prev = true;
+  out.timing_ms["total"] = msSince(t_all);
+  return out;
+}
+
+}  // namespace vitamin_e::tracking
