@@ -1,0 +1,63 @@
+#pragma once
+// Subspace Gauss-Newton bundle adjustment (VITAMIN-E, Yokozuka et al. CVPR 2019, Sec. 3.2,
+// Eq. 11-12, and the supplementary's variable elimination).
+//
+// One SWEEP:
+//  1. Linearize every observation that touches a free variable at the current estimate
+//     (analytic Jacobians, Geman-McClure IRLS weights w = rho'(|r|^2)): per camera the 6x6
+//     block H_cc and g_c, per point the 3x3 block H_pp and g_p, per (camera, point) pair the
+//     6x3 coupling H_cp. Nothing larger than 6x6 is ever formed or inverted.
+//  2. Camera blocks (Eq. 11). With use_schur (default) each camera update eliminates the
+//     points it sees: its 6x6 system is S_ii = H_cc,i - sum_j H_cp H_pp^-1 H_pc (the 6x6
+//     diagonal block of the reduced camera system) and the coupling with the other cameras goes
+//     through the shared points, using their latest updates (block Gauss-Seidel over cameras,
+//     repeated camera_iterations times or until the camera updates stop changing). Without
+//     use_schur it is the paper's plain Eq. 11/12 Gauss-Seidel (camera blocks with the points'
+//     current updates, then point blocks), repeated camera_iterations times.
+//  3. Point blocks (Eq. 12): each 3x3 update given the camera updates; the points are
+//     independent given the cameras, so this runs on `threads` threads.
+//  4. The step is applied (T_w_c <- T_w_c * expSE3(dc), p_w <- p_w + dp) and kept only if the
+//     robust cost decreased; otherwise the LM damping lambda (Marquardt: each block's diagonal
+//     is scaled by 1 + lambda) grows and the step is recomputed from the same linearization.
+// Stops when the relative cost decrease of an accepted step is below `tolerance`, when no
+// damped step decreases the cost, or after max_sweeps.
+//
+// Gauge: only the `fixed` flags of the problem are honoured (see ba_problem.h and
+// ba_window.h); fix at least the two oldest cameras for a monocular problem.
+#include <vector>
+
+#include "vitamin_e/optimization/ba_problem.h"
+
+namespace vitamin_e {
+namespace optimization {
+
+struct BaOptions {
+  double robust_sigma_px = 2.0;  // Geman-McClure sigma
+  int max_sweeps = 20;
+  double tolerance = 1e-6;       // relative cost change of an accepted sweep
+  int threads = 1;               // point blocks (and linearization) run on this many threads
+  bool use_schur = true;         // eliminate the points inside each camera update
+  int camera_iterations = 10;    // max Gauss-Seidel passes over the camera blocks per sweep
+  double camera_gs_tolerance = 1e-3;  // stop the passes when max |change| < this * max |update|
+  double initial_lambda = 1e-4;  // LM damping (relative to the block diagonals)
+  int max_retries = 8;           // damped re-solves per sweep before giving up
+  void validate() const;         // throws std::invalid_argument naming the key
+};
+
+struct BaSummary {
+  double initial_cost = 0.0;  // baCost at the start (all observations)
+  double final_cost = 0.0;    // baCost at the end
+  int sweeps = 0;             // linearizations performed
+  double time_ms = 0.0;
+  bool converged = false;     // relative cost change fell below tolerance
+  std::vector<double> residual_px;  // per observation, final |r| in pixels
+  int free_cameras = 0;
+  int free_points = 0;
+  int active_observations = 0;  // observations touching a free variable
+  double final_lambda = 0.0;
+};
+
+BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options);
+
+}  // namespace optimization
+}  // namespace vitamin_e
