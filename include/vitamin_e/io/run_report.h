@@ -1,0 +1,52 @@
+#pragma once
+// What an offline run reports: counters and per-stage timings gathered frame by
+// frame, written as stats.json; and the progress line the runner prints.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "vitamin_e/common/timing.h"
+
+namespace vitamin_e::io {
+
+struct RunStats {
+  std::string dataset;           // path as given
+  std::string dataset_kind;      // "euroc", ...
+  std::string config;            // config file ("" = defaults)
+  std::size_t frames = 0;        // frames given to the system
+  std::size_t tracked_frames = 0;
+  std::size_t skipped_frames = 0;  // unreadable images (warned and skipped)
+  int init_retries = 0;
+  std::size_t map_points = 0;    // points written to points.ply
+  bool interrupted = false;      // stopped by SIGINT/SIGTERM
+  double wall_time_s = 0.0;
+  double peak_rss_mb = 0.0;
+  std::vector<double> points_per_frame;         // tracked points of each frame
+  std::vector<double> mapped_points_per_frame;  // of which with a 3D position
+  StageTimings timing;           // per-stage ms, with a "total" stage
+
+  // Records one processed frame: its point counts and stage times (total_ms is
+  // the runner's wall time of process()).
+  void addFrame(bool tracked, std::size_t points, std::size_t mapped,
+                const std::vector<std::pair<std::string, double>>& stage_ms, double total_ms);
+  double successRate() const { return frames ? static_cast<double>(tracked_frames) / frames : 0.0; }
+};
+
+// stats.json: frames, tracked_frames, success_rate, init_retries,
+// points_per_frame {mean, median}, timing_ms {stage: {mean, median, p95}}, peak_rss_mb, ...
+std::string toJson(const RunStats& stats);
+// Writes toJson(stats) to path; false (and *error) when it cannot.
+bool writeRunStats(const RunStats& stats, const std::string& path, std::string* error = nullptr);
+
+// Peak resident set size of this process in MB (getrusage ru_maxrss).
+double peakRssMb();
+
+// "[#####.....]  120/2912   4.1%  23.5 fps  ETA 1m59s  tracked 95%" (bar_width 0: no bar).
+std::string formatProgress(std::size_t done, std::size_t total, double elapsed_s, double tracked_ratio,
+                           int bar_width);
+// "1h02m03s", "4m05s", "7s".
+std::string formatDuration(double seconds);
+// JSON string literal with escapes.
+std::string jsonString(const std::string& s);
+
+}  // namespace vitamin_e::io
