@@ -2,6 +2,7 @@
 // Per-frame triangle mesh over the tracked points of one image (pinhole pixels),
 // built by FrameMesher and smoothed by NltgvDenoiser; TsdfVolume integrates it.
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
 

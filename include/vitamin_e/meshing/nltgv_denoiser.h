@@ -20,10 +20,10 @@ namespace vitamin_e::meshing {
 
 struct NltgvConfig {
   double alpha = 1.0;         // weight of the first-order (affine) term
-  double beta = 0.02;         // weight of the gradient smoothness term (normalized-coordinate units)
-  double lambda = 0.5;        // weight of the L1 data term
-  int iterations = 150;       // primal-dual iterations (cold start)
-  int warm_iterations = 60;   // iterations when most vertices were warm-started
+  double beta = 0.1;          // weight of the gradient smoothness term (normalized-coordinate units)
+  double lambda = 1.0;        // weight of the L1 data term
+  int iterations = 200;       // primal-dual iterations (cold start)
+  int warm_iterations = 80;   // iterations when most vertices were warm-started
   double theta = 1.0;         // over-relaxation
   bool warm_start = true;
   void validate() const;      // throws std::invalid_argument naming the key
