@@ -1,0 +1,256 @@
+// TSDF integration and marching tetrahedra on synthetic spheres and planes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <random>
+
+#include "vitamin_e/fusion/tsdf_integrator.h"
+#include "vitamin_e/fusion/tsdf_volume.h"
+#include "vitamin_e/meshing/frame_mesher.h"
+
+using namespace vitamin_e;
+using meshing::PinholeIntrinsics;
+using Eigen::Isometry3d;
+using Eigen::Vector3d;
+
+namespace {
+
+PinholeIntrinsics smallK() {
+  PinholeIntrinsics K;
+  K.fx = K.fy = 200.0;
+  K.cx = 159.5;
+  K.cy = 119.5;
+  K.width = 320;
+  K.height = 240;
+  return K;
+}
+
+// Camera at `eye` looking at `target` (optical frame: z forward, y down-ish).
+Isometry3d lookAt(const Vector3d& eye, const Vector3d& target) {
+  const Vector3d z = (target - eye).normalized();
+  Vector3d up = std::abs(z.z()) > 0.9 ? Vector3d::UnitX() : Vector3d::UnitZ();
+  const Vector3d x = z.cross(up).normalized();  // right
+  const Vector3d y = z.cross(x);                // down
+  Isometry3d T = Isometry3d::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = y;
+  T.linear().col(2) = z;
+  T.translation() = eye;
+  return T;
+}
+
+// Depth map (z) of a sphere (centre c, radius r, world) seen from T_w_c.
+std::vector<float> sphereDepth(const Vector3d& c, double r, const Isometry3d& T_w_c, const PinholeIntrinsics& K) {
+  std::vector<float> depth(static_cast<std::size_t>(K.width) * K.height, 0.0f);
+  const Vector3d c_c = T_w_c.inverse() * c;
+  for (int v = 0; v < K.height; ++v)
+    for (int u = 0; u < K.width; ++u) {
+      const Vector3d ray = K.ray(Eigen::Vector2d(u, v));  // z = 1
+      const double a = ray.squaredNorm(), b = -2.0 * ray.dot(c_c), cc = c_c.squaredNorm() - r * r;
+      const double disc = b * b - 4 * a * cc;
+      if (disc < 0) continue;
+      const double t = (-b - std::sqrt(disc)) / (2 * a);
+      if (t > 0) depth[static_cast<std::size_t>(v) * K.width + u] = static_cast<float>(t);
+    }
+  return depth;
+}
+
+std::vector<Isometry3d> viewsAround(const Vector3d& c, double dist) {
+  std::vector<Isometry3d> views;
+  for (int sx = -1; sx <= 1; ++sx)
+    for (int sy = -1; sy <= 1; ++sy)
+      for (int sz = -1; sz <= 1; ++sz) {
+        if (sx == 0 && sy == 0 && sz == 0) continue;
+        views.push_back(lookAt(c + dist * Vector3d(sx, sy, sz).normalized(), c));
+      }
+  return views;  // 26 directions
+}
+
+// Frame mesh of the plane z = 0 (world) seen from T_w_c: jittered grid of points.
+meshing::FrameMesh planeMesh(const Isometry3d& T_w_c, const PinholeIntrinsics& K, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> J(-2.0, 2.0);
+  std::vector<std::uint64_t> ids;
+  std::vector<Eigen::Vector2d> uv;
+  std::vector<double> depth;
+  const Vector3d o = T_w_c.translation();
+  for (int v = 2; v < K.height - 2; v += 8)
+    for (int u = 2; u < K.width - 2; u += 8) {
+      const Eigen::Vector2d px(u + J(rng), v + J(rng));
+      const Vector3d d_w = T_w_c.linear() * K.ray(px);  // z-unit ray in world
+      if (d_w.z() >= -1e-6) continue;
+      const double t = -o.z() / d_w.z();  // depth z (ray has z_c = 1)
+      ids.push_back(ids.size());
+      uv.push_back(px);
+      depth.push_back(t);
+    }
+  meshing::FrameMesherConfig cfg;
+  cfg.max_edge_px = 30.0;
+  return meshing::FrameMesher(cfg).build(ids, uv, depth, K);
+}
+
+// Every undirected edge is shared by exactly two faces, in opposite directions.
+void expectClosed(const fusion::TriangleMesh& mesh) {
+  std::map<std::pair<int, int>, int> directed;
+  for (const auto& f : mesh.faces)
+    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
+  int bad = 0;
+  for (const auto& [e, c] : directed) {
+    const auto it = directed.find({e.second, e.first});
+    if (c != 1 || it == directed.end() || it->second != 1) ++bad;
+  }
+  EXPECT_EQ(bad, 0) << "of " << directed.size() << " directed edges";
+}
+
+}  // namespace
+
+TEST(Tsdf, SphereFromManyViewsIsAccurateAndClosed) {
+  const PinholeIntrinsics K = smallK();
+  fusion::TsdfConfig cfg;
+  cfg.voxel_size = 0.03;
+  cfg.truncation = 0.09;
+  fusion::TsdfVolume volume(cfg);
+  const Vector3d c(0.31, -0.17, 0.52);
+  const double r = 0.4;
+  for (const auto& T : viewsAround(c, 1.5)) volume.integrateDepth(sphereDepth(c, r, T, K), T, K);
+  const fusion::TriangleMesh mesh = volume.extractMesh();
+  ASSERT_GT(mesh.faces.size(), 1000u);
+  double worst = 0.0, normal_worst = 1.0, normal_mean = 0.0;
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Vector3d p = mesh.vertices[i].cast<double>();
+    worst = std::max(worst, std::abs((p - c).norm() - r));
+    const double dot = mesh.normals[i].cast<double>().dot((p - c).normalized());
+    normal_worst = std::min(normal_worst, dot);
+    normal_mean += dot / mesh.vertices.size();
+  }
+  EXPECT_LT(worst, cfg.voxel_size);
+  // Normals point out of the sphere (area-weighted face normals: a little bumpy).
+  EXPECT_GT(normal_worst, 0.6);
+  EXPECT_GT(normal_mean, 0.97);
+  expectClosed(mesh);
+}
+
+TEST(Tsdf, PlaneFromFrameMeshesIsWithinOneVoxel) {
+  const PinholeIntrinsics K = smallK();
+  fusion::TsdfConfig cfg;
+  cfg.voxel_size = 0.05;
+  cfg.truncation = 0.15;
+  fusion::TsdfVolume volume(cfg);
+  unsigned seed = 1;
+  for (double x : {-0.5, 0.0, 0.5})
+    for (double y : {-0.4, 0.4}) {
+      const Isometry3d T = lookAt(Vector3d(x, y, 1.5), Vector3d(0.3 * x, 0.2, 0.0));
+      volume.integrate(planeMesh(T, K, seed++), T, K);
+    }
+  const fusion::TriangleMesh mesh = volume.extractMesh();
+  ASSERT_GT(mesh.faces.size(), 200u);
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    EXPECT_LT(std::abs(mesh.vertices[i].z()), cfg.voxel_size);
+    EXPECT_GT(mesh.normals[i].z(), 0.9f);  // facing the cameras
+  }
+}
+
+TEST(Tsdf, SameFrameTwiceOnlyChangesWeights) {
+  const PinholeIntrinsics K = smallK();
+  const Isometry3d T = lookAt(Vector3d(0.2, 0.1, 1.2), Vector3d(0.0, 0.0, 0.0));
+  const meshing::FrameMesh mesh = planeMesh(T, K, 5);
+  fusion::TsdfVolume once, twice;
+  once.integrate(mesh, T, K);
+  twice.integrate(mesh, T, K);
+  twice.integrate(mesh, T, K);
+  ASSERT_EQ(once.numBlocks(), twice.numBlocks());
+  std::size_t n = 0;
+  once.forEachVoxel([&](const Vector3d& p, const fusion::Voxel& v) {
+    const fusion::Voxel* w = twice.voxelAt(p);
+    ASSERT_NE(w, nullptr);
+    EXPECT_NEAR(w->sdf, v.sdf, 1e-6);
+    EXPECT_FLOAT_EQ(w->weight, 2.0f * v.weight);
+    ++n;
+  });
+  EXPECT_GT(n, 1000u);
+  const auto m1 = once.extractMesh(), m2 = twice.extractMesh();
+  EXPECT_EQ(m1.faces.size(), m2.faces.size());
+}
+
+TEST(Tsdf, IncrementalExtractionMatchesFullExtraction) {
+  const PinholeIntrinsics K = smallK();
+  fusion::TsdfConfig cfg;
+  cfg.voxel_size = 0.04;
+  cfg.truncation = 0.12;
+  const Vector3d c(0.0, 0.0, 0.0);
+  const auto views = viewsAround(c, 1.5);
+  fusion::TsdfVolume incremental(cfg), full(cfg);
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    const auto depth = sphereDepth(c, 0.35, views[k], K);
+    incremental.integrateDepth(depth, views[k], K);
+    full.integrateDepth(depth, views[k], K);
+    if (k % 5 == 0) incremental.extractMesh();
+  }
+  // One more partial view: only part of the blocks are re-meshed.
+  const Isometry3d last = lookAt(Vector3d(1.5, 0.0, 0.2), c);
+  incremental.extractMesh();
+  incremental.integrateDepth(sphereDepth(c, 0.35, last, K), last, K);
+  full.integrateDepth(sphereDepth(c, 0.35, last, K), last, K);
+  const auto a = incremental.extractMesh();
+  EXPECT_LT(incremental.lastRemeshedBlocks(), incremental.numBlocks());
+  const auto b = full.extractMesh();
+  ASSERT_EQ(a.faces.size(), b.faces.size());
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  auto key = [](const Eigen::Vector3f& p) {
+    return std::make_tuple(std::lround(p.x() * 1e5), std::lround(p.y() * 1e5), std::lround(p.z() * 1e5));
+  };
+  std::map<std::tuple<long, long, long>, int> count;
+  for (const auto& p : a.vertices) ++count[key(p)];
+  for (const auto& p : b.vertices) --count[key(p)];
+  for (const auto& [k, n] : count) EXPECT_EQ(n, 0);
+  expectClosed(a);
+}
+
+TEST(Tsdf, AsyncIntegratorMatchesSynchronousAndWritesPly) {
+  const PinholeIntrinsics K = smallK();
+  fusion::TsdfIntegratorConfig sync_cfg, async_cfg;
+  sync_cfg.asynchronous = false;
+  async_cfg.asynchronous = true;
+  async_cfg.block_when_full = true;
+  async_cfg.queue_capacity = 2;
+  fusion::TsdfIntegrator sync(sync_cfg), async(async_cfg);
+  for (int k = 0; k < 5; ++k) {
+    const Isometry3d T = lookAt(Vector3d(0.3 * k - 0.6, 0.2, 1.3), Vector3d(0.0, 0.0, 0.0));
+    const auto mesh = planeMesh(T, K, 20 + k);
+    sync.submit(mesh, T, K);
+    async.submit(mesh, T, K);
+  }
+  async.flush();
+  EXPECT_EQ(async.stats().integrated, 5u);
+  EXPECT_EQ(async.stats().dropped, 0u);
+  const auto a = sync.extractMesh(), b = async.extractMesh();
+  EXPECT_EQ(a.faces.size(), b.faces.size());
+  EXPECT_GT(a.faces.size(), 100u);
+
+  const std::string path = testing::TempDir() + "/vitamin_e_tsdf_test.ply";
+  std::string error;
+  ASSERT_TRUE(fusion::saveMeshPly(a, path, &error, false)) << error;
+  std::ifstream in(path);
+  std::string line, header;
+  while (std::getline(in, line) && line != "end_header") header += line + "\n";
+  EXPECT_NE(header.find("element vertex " + std::to_string(a.vertices.size())), std::string::npos);
+  EXPECT_NE(header.find("element face " + std::to_string(a.faces.size())), std::string::npos);
+  EXPECT_NE(header.find("property float nx"), std::string::npos);
+  std::remove(path.c_str());
+  EXPECT_FALSE(fusion::saveMeshPly(a, "/nonexistent_dir/x.ply", &error));
+  EXPECT_FALSE(error.empty());
+}
+
+TEST(Tsdf, ConfigValidation) {
+  fusion::TsdfConfig cfg;
+  cfg.truncation = 0.01;  // < voxel size
+  EXPECT_THROW(fusion::TsdfVolume{cfg}, std::invalid_argument);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
