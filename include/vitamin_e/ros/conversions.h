@@ -1,0 +1,50 @@
+#pragma once
+// Conversions between the ROS-free core (Eigen, cv::Mat, camera::Camera) and ROS
+// messages, shared by the nodelets. No algorithm here: copies, checks, encodings.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Transform.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_msgs/Header.h>
+
+#include "vitamin_e/camera/camera.h"
+
+namespace vitamin_e_ros {
+
+// True when every entry of the pose is finite and the rotation is orthonormal.
+bool isFinite(const Eigen::Isometry3d& T);
+bool isFinite(const Eigen::Vector3d& p);
+
+geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
+geometry_msgs::Transform toTransformMsg(const Eigen::Isometry3d& T);
+Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose);
+Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& transform);
+
+// Image message -> CV_8UC1 (mono8 shared without copy when possible; rgb8, bgr8,
+// rgba8, bgra8 converted to gray; mono16 / 16UC1 shifted >> 8). Returns false
+// and sets *error for any other encoding or a malformed message.
+bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error);
+
+// camera_info -> camera model (plumb_bob / rational_polynomial (first 5) /
+// equidistant / none). Throws camera::CalibrationError on bad values.
+vitamin_e::camera::Camera cameraFromInfo(const sensor_msgs::CameraInfo& info);
+// "none" | "radial-tangential" | "equidistant".
+std::string distortionName(vitamin_e::camera::DistortionModel model);
+
+// A PointCloud2 with fields x, y, z (float32) and intensity (float32).
+// intensity may be empty (all zero) or of points' size.
+void fillCloud(const std_msgs::Header& header, const std::vector<Eigen::Vector3f>& points,
+               const std::vector<std::uint8_t>& intensity, sensor_msgs::PointCloud2* cloud);
+
+// Seconds as text with nanosecond digits ("1403715273.262142976").
+std::string stampText(std::uint32_t sec, std::uint32_t nsec);
+
+}  // namespace vitamin_e_ros

@@ -1,0 +1,172 @@
+#include "vitamin_e/ros/conversions.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <opencv2/imgproc.hpp>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+namespace vitamin_e_ros {
+
+namespace enc = sensor_msgs::image_encodings;
+using vitamin_e::camera::Camera;
+using vitamin_e::camera::CalibrationError;
+using vitamin_e::camera::DistortionModel;
+
+bool isFinite(const Eigen::Isometry3d& T) {
+  if (!T.matrix().allFinite()) return false;
+  const Eigen::Matrix3d R = T.linear();
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() < 1e-6;
+}
+
+bool isFinite(const Eigen::Vector3d& p) { return p.allFinite(); }
+
+geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
+  geometry_msgs::Pose pose;
+  const Eigen::Quaterniond q(T.linear());
+  pose.position.x = T.translation().x();
+  pose.position.y = T.translation().y();
+  pose.position.z = T.translation().z();
+  pose.orientation.w = q.w();
+  pose.orientation.x = q.x();
+  pose.orientation.y = q.y();
+  pose.orientation.z = q.z();
+  return pose;
+}
+
+geometry_msgs::Transform toTransformMsg(const Eigen::Isometry3d& T) {
+  const geometry_msgs::Pose pose = toPoseMsg(T);
+  geometry_msgs::Transform tf;
+  tf.translation.x = pose.position.x;
+  tf.translation.y = pose.position.y;
+  tf.translation.z = pose.position.z;
+  tf.rotation = pose.orientation;
+  return tf;
+}
+
+Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond q(pose.orientation.w, pose.orientation.x, pose.orientation.y, pose.orientation.z);
+  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  return T;
+}
+
+Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& transform) {
+  geometry_msgs::Pose pose;
+  pose.position.x = transform.translation.x;
+  pose.position.y = transform.translation.y;
+  pose.position.z = transform.translation.z;
+  pose.orientation = transform.rotation;
+  return fromPoseMsg(pose);
+}
+
+bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error) {
+  const std::string& e = msg.encoding;
+  int cv_type = -1;
+  int channels = 1;
+  if (e == enc::MONO8 || e == enc::TYPE_8UC1) {
+    cv_type = CV_8UC1;
+  } else if (e == enc::MONO16 || e == enc::TYPE_16UC1) {
+    cv_type = CV_16UC1;
+  } else if (e == enc::RGB8 || e == enc::BGR8) {
+    cv_type = CV_8UC3;
+    channels = 3;
+  } else if (e == enc::RGBA8 || e == enc::BGRA8) {
+    cv_type = CV_8UC4;
+    channels = 4;
+  } else {
+    *error = "unsupported image encoding '" + e + "' (mono8, mono16, rgb8, bgr8, rgba8, bgra8)";
+    return false;
+  }
+  const std::size_t bytes_per_pixel = static_cast<std::size_t>(channels) * (cv_type == CV_16UC1 ? 2 : 1);
+  if (msg.width == 0 || msg.height == 0 || msg.step < msg.width * bytes_per_pixel ||
+      msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height) {
+    *error = "malformed image message (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) +
+             ", step " + std::to_string(msg.step) + ", " + std::to_string(msg.data.size()) + " bytes)";
+    return false;
+  }
+  const bool big_endian_host = false;
+  if (cv_type == CV_16UC1 && static_cast<bool>(msg.is_bigendian) != big_endian_host) {
+    *error = "big-endian 16-bit images are not supported";
+    return false;
+  }
+  // A view on the message's buffer (no copy); converted images get their own buffer.
+  const cv::Mat view(static_cast<int>(msg.height), static_cast<int>(msg.width), cv_type,
+                     const_cast<std::uint8_t*>(msg.data.data()), msg.step);
+  if (cv_type == CV_8UC1) {
+    *gray = view;
+  } else if (cv_type == CV_16UC1) {
+    view.convertTo(*gray, CV_8U, 1.0 / 256.0);
+  } else if (e == enc::RGB8) {
+    cv::cvtColor(view, *gray, cv::COLOR_RGB2GRAY);
+  } else if (e == enc::BGR8) {
+    cv::cvtColor(view, *gray, cv::COLOR_BGR2GRAY);
+  } else if (e == enc::RGBA8) {
+    cv::cvtColor(view, *gray, cv::COLOR_RGBA2GRAY);
+  } else {
+    cv::cvtColor(view, *gray, cv::COLOR_BGRA2GRAY);
+  }
+  return true;
+}
+
+Camera cameraFromInfo(const sensor_msgs::CameraInfo& info) {
+  const double fx = info.K[0], fy = info.K[4], cx = info.K[2], cy = info.K[5];
+  const std::string& m = info.distortion_model;
+  std::vector<double> d(info.D.begin(), info.D.end());
+  const bool all_zero = std::all_of(d.begin(), d.end(), [](double v) { return v == 0.0; });
+  if (d.empty() || all_zero) {
+    return Camera(static_cast<int>(info.width), static_cast<int>(info.height), fx, fy, cx, cy);
+  }
+  if (m == "plumb_bob" || m == "rational_polynomial") {
+    if (d.size() > 5) d.resize(5);
+    if (d.size() == 5 && d[4] == 0.0) d.resize(4);
+    return Camera(static_cast<int>(info.width), static_cast<int>(info.height), fx, fy, cx, cy,
+                  DistortionModel::kRadialTangential, d);
+  }
+  if (m == "equidistant" || m == "fisheye") {
+    return Camera(static_cast<int>(info.width), static_cast<int>(info.height), fx, fy, cx, cy,
+                  DistortionModel::kEquidistant, d);
+  }
+  throw CalibrationError("camera_info: unsupported distortion_model '" + m + "'");
+}
+
+std::string distortionName(DistortionModel model) {
+  switch (model) {
+    case DistortionModel::kRadialTangential: return "radial-tangential";
+    case DistortionModel::kEquidistant: return "equidistant";
+    default: return "none";
+  }
+}
+
+void fillCloud(const std_msgs::Header& header, const std::vector<Eigen::Vector3f>& points,
+               const std::vector<std::uint8_t>& intensity, sensor_msgs::PointCloud2* cloud) {
+  cloud->header = header;
+  cloud->height = 1;
+  cloud->is_dense = true;
+  cloud->is_bigendian = false;
+  sensor_msgs::PointCloud2Modifier modifier(*cloud);
+  modifier.setPointCloud2Fields(4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1,
+                                sensor_msgs::PointField::FLOAT32, "z", 1, sensor_msgs::PointField::FLOAT32,
+                                "intensity", 1, sensor_msgs::PointField::FLOAT32);
+  modifier.resize(points.size());
+  sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x"), y(*cloud, "y"), z(*cloud, "z"),
+      i(*cloud, "intensity");
+  const bool has_intensity = intensity.size() == points.size();
+  for (std::size_t k = 0; k < points.size(); ++k, ++x, ++y, ++z, ++i) {
+    *x = points[k].x();
+    *y = points[k].y();
+    *z = points[k].z();
+    *i = has_intensity ? static_cast<float>(intensity[k]) : 0.0f;
+  }
+}
+
+std::string stampText(std::uint32_t sec, std::uint32_t nsec) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%u.%09u", sec, nsec);
+  return buf;
+}
+
+}  // namespace vitamin_e_ros

@@ -1,0 +1,223 @@
+// TrackingNodelet: FrameResult -> messages. Every pose and point is checked finite
+// before it is published (a non-finite one is skipped with a throttled error).
+#include <cmath>
+
+#include <cv_bridge/cv_bridge.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <opencv2/imgproc.hpp>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include "tracking_nodelet.h"
+#include "vitamin_e/TrackedFrame.h"
+#include "vitamin_e/TrackingStatus.h"
+#include "vitamin_e/ros/conversions.h"
+
+namespace vitamin_e_ros {
+
+using vitamin_e::pipeline::FrameResult;
+using vitamin_e::pipeline::TrackingState;
+
+void TrackingNodelet::publishResult(const FrameResult& result, const std_msgs::Header& header, const cv::Mat& gray,
+                                    double ms) {
+  vitamin_e::TrackingStatusPtr status(new vitamin_e::TrackingStatus);
+  status->header = header;
+  status->header.frame_id = frame_id_;
+  status->state = result.state == TrackingState::kTracking   ? vitamin_e::TrackingStatus::TRACKING
+                  : result.state == TrackingState::kLost     ? vitamin_e::TrackingStatus::LOST
+                                                             : vitamin_e::TrackingStatus::INITIALIZING;
+  status->state_name = vitamin_e::pipeline::toString(result.state);
+  status->frame_index = result.frame_index;
+  status->num_tracked = static_cast<uint32_t>(result.num_tracked);
+  status->num_mapped = static_cast<uint32_t>(result.num_mapped);
+  status->map_size = static_cast<uint32_t>(result.map_size);
+  status->init_retries = result.init_retries;
+  status->ms_per_frame = static_cast<float>(ms);
+  status->frames_processed = system_->framesProcessed();
+  status->frames_tracked = system_->framesTracked();
+  status->message = result.message;
+  status_pub_.publish(status);
+
+  if (result.pose_valid) {
+    if (isFinite(result.T_w_c)) {
+      publishPose(result, header);
+      if (dyn_.publish_tf) publishTf(result.T_w_c, header.stamp);
+      if (dyn_.publish_points && points_pub_.getNumSubscribers() > 0) publishPoints(result, header);
+      if (frame_pub_.getNumSubscribers() > 0) publishFrame(result, header);
+    } else {
+      NODELET_ERROR_THROTTLE(2.0, "frame %lu: non-finite pose not published",
+                             static_cast<unsigned long>(result.frame_index));
+    }
+  }
+  if (dyn_.map_points_period > 0.0 && map_points_pub_.getNumSubscribers() > 0 &&
+      (last_map_points_.isZero() || (header.stamp - last_map_points_).toSec() >= dyn_.map_points_period ||
+       header.stamp < last_map_points_)) {
+    publishMapPoints(header.stamp);
+    last_map_points_ = header.stamp;
+  }
+  if (tracking_image_pub_.getNumSubscribers() > 0) publishTrackingImage(result, header, gray);
+}
+
+void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Header& header) {
+  const geometry_msgs::Pose pose = toPoseMsg(result.T_w_c);
+  geometry_msgs::PoseStampedPtr stamped(new geometry_msgs::PoseStamped);
+  stamped->header.stamp = header.stamp;
+  stamped->header.frame_id = map_frame_;
+  stamped->pose = pose;
+  pose_pub_.publish(stamped);
+
+  nav_msgs::OdometryPtr odom(new nav_msgs::Odometry);
+  odom->header = stamped->header;
+  odom->child_frame_id = frame_id_;
+  odom->pose.pose = pose;
+  odom->twist.covariance[0] = -1.0;  // twist not estimated
+  odom_pub_.publish(odom);
+
+  path_.header.stamp = header.stamp;
+  path_.poses.push_back(*stamped);
+  if (dyn_.path_max_poses > 0 && path_.poses.size() > static_cast<std::size_t>(dyn_.path_max_poses)) {
+    path_.poses.erase(path_.poses.begin(), path_.poses.end() - dyn_.path_max_poses);
+  }
+  if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
+}
+
+void TrackingNodelet::publishTf(const Eigen::Isometry3d& T_w_c, const ros::Time& stamp) {
+  geometry_msgs::TransformStamped tf;
+  tf.header.stamp = stamp;
+  tf.header.frame_id = map_frame_;
+  if (tf_buffer_) {
+    // REP-105: map -> odom = T_map_cam * T_cam_odom, with cam -> base -> odom from tf.
+    geometry_msgs::TransformStamped cam_odom;
+    try {
+      cam_odom = tf_buffer_->lookupTransform(frame_id_, odom_frame_, stamp, ros::Duration(0.05));
+    } catch (const tf2::TransformException& e) {
+      NODELET_WARN_THROTTLE(5.0, "no %s -> %s at %.3f (%s): map -> %s not published", odom_frame_.c_str(),
+                            frame_id_.c_str(), stamp.toSec(), e.what(), odom_frame_.c_str());
+      return;
+    }
+    const Eigen::Isometry3d T_map_odom = T_w_c * fromTransformMsg(cam_odom.transform);
+    if (!isFinite(T_map_odom)) {
+      NODELET_ERROR_THROTTLE(2.0, "non-finite map -> odom not published");
+      return;
+    }
+    tf.child_frame_id = odom_frame_;
+    tf.transform = toTransformMsg(T_map_odom);
+  } else {
+    tf.child_frame_id = frame_id_;
+    tf.transform = toTransformMsg(T_w_c);
+  }
+  tf_broadcaster_->sendTransform(tf);
+}
+
+void TrackingNodelet::publishPoints(const FrameResult& result, const std_msgs::Header& header) {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<std::uint8_t> intensity;
+  points.reserve(result.points.size());
+  intensity.reserve(result.points.size());
+  const Eigen::Isometry3d T_c_w = result.T_w_c.inverse();
+  std::size_t skipped = 0;
+  for (const auto& p : result.points) {
+    if (!p.has_position) continue;
+    if (!isFinite(p.p_w)) {
+      ++skipped;
+      continue;
+    }
+    if (dyn_.points_max_depth > 0.0 && (T_c_w * p.p_w).z() > dyn_.points_max_depth) continue;
+    points.push_back(p.p_w.cast<float>());
+    intensity.push_back(p.intensity);
+  }
+  if (skipped > 0) NODELET_ERROR_THROTTLE(2.0, "%zu non-finite points not published", skipped);
+  sensor_msgs::PointCloud2Ptr cloud(new sensor_msgs::PointCloud2);
+  std_msgs::Header h = header;
+  h.frame_id = map_frame_;
+  fillCloud(h, points, intensity, cloud.get());
+  points_pub_.publish(cloud);
+}
+
+void TrackingNodelet::publishFrame(const FrameResult& result, const std_msgs::Header& header) {
+  vitamin_e::TrackedFramePtr frame(new vitamin_e::TrackedFrame);
+  frame->header.stamp = header.stamp;
+  frame->header.frame_id = map_frame_;
+  frame->T_w_c = toPoseMsg(result.T_w_c);
+  frame->frame_index = result.frame_index;
+  const auto& camera = system_->camera();
+  frame->width = static_cast<uint32_t>(camera.width());
+  frame->height = static_cast<uint32_t>(camera.height());
+  frame->fx = camera.fx();
+  frame->fy = camera.fy();
+  frame->cx = camera.cx();
+  frame->cy = camera.cy();
+  frame->distortion_model = distortionName(camera.model());
+  frame->distortion = camera.distortion();
+  const Eigen::Isometry3d T_c_w = result.T_w_c.inverse();
+  for (const auto& p : result.points) {
+    if (!p.has_position || !isFinite(p.p_w) || !p.uv.allFinite()) continue;
+    const Eigen::Vector3d p_c = T_c_w * p.p_w;
+    if (!(p_c.z() > 0.0)) continue;
+    geometry_msgs::Point32 q;
+    q.x = static_cast<float>(p_c.x());
+    q.y = static_cast<float>(p_c.y());
+    q.z = static_cast<float>(p_c.z());
+    frame->ids.push_back(p.track_id);
+    frame->u.push_back(p.uv.x());
+    frame->v.push_back(p.uv.y());
+    frame->depth.push_back(q.z);
+    frame->points_c.push_back(q);
+    frame->intensity.push_back(p.intensity);
+  }
+  frame_pub_.publish(vitamin_e::TrackedFrameConstPtr(frame));  // zero copy inside one manager
+}
+
+void TrackingNodelet::publishMapPoints(const ros::Time& stamp) {
+  const auto map = system_->mapPoints();
+  std::vector<Eigen::Vector3f> points;
+  std::vector<std::uint8_t> intensity;
+  points.reserve(map.size());
+  intensity.reserve(map.size());
+  for (const auto& p : map) {
+    if (!isFinite(p.p_w)) continue;
+    points.push_back(p.p_w.cast<float>());
+    intensity.push_back(p.intensity);
+  }
+  if (points.size() < map.size()) {
+    NODELET_ERROR_THROTTLE(2.0, "%zu non-finite map points not published", map.size() - points.size());
+  }
+  sensor_msgs::PointCloud2Ptr cloud(new sensor_msgs::PointCloud2);
+  std_msgs::Header h;
+  h.stamp = stamp;
+  h.frame_id = map_frame_;
+  fillCloud(h, points, intensity, cloud.get());
+  map_points_pub_.publish(cloud);
+}
+
+void TrackingNodelet::publishTrackingImage(const FrameResult& result, const std_msgs::Header& header,
+                                           const cv::Mat& gray) {
+  cv_bridge::CvImage out;
+  out.header = header;
+  out.encoding = sensor_msgs::image_encodings::BGR8;
+  cv::cvtColor(gray, out.image, cv::COLOR_GRAY2BGR);
+  const std::size_t history = static_cast<std::size_t>(std::max(0, dyn_.draw_track_length));
+  std::map<std::uint64_t, std::deque<cv::Point2f>> alive;
+  for (const auto& p : result.points) {
+    if (!p.uv.allFinite()) continue;
+    const cv::Point2f uv(p.uv.x(), p.uv.y());
+    auto& trail = alive[p.track_id];
+    auto old = track_history_.find(p.track_id);
+    if (old != track_history_.end()) trail = std::move(old->second);
+    trail.push_back(uv);
+    while (trail.size() > history + 1) trail.pop_front();
+    const cv::Scalar color = p.has_position ? cv::Scalar(0, 220, 0) : cv::Scalar(0, 160, 255);
+    for (std::size_t k = 1; k < trail.size(); ++k) cv::line(out.image, trail[k - 1], trail[k], color, 1, cv::LINE_AA);
+    cv::circle(out.image, uv, 2, color, -1, cv::LINE_AA);
+  }
+  track_history_ = std::move(alive);
+  const std::string text = std::string(vitamin_e::pipeline::toString(result.state)) + "  tracks " +
+                           std::to_string(result.num_tracked) + "  mapped " + std::to_string(result.num_mapped);
+  cv::putText(out.image, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 255), 1,
+              cv::LINE_AA);
+  tracking_image_pub_.publish(out.toImageMsg());
+}
+
+}  // namespace vitamin_e_ros

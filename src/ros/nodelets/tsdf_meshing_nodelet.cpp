@@ -1,0 +1,209 @@
+// vitamin_e/TsdfMeshingNodelet: per-frame messages of TrackingNodelet (~frame) in,
+// TSDF mesh out. Each frame's points are meshed (meshing::FrameMesher, optional
+// NLTGV smoothing) and fused into a fusion::TsdfVolume; the zero level set is
+// published every ~publish_period as a chunked MarkerArray of TRIANGLE_LISTs.
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <dynamic_reconfigure/server.h>
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "vitamin_e/SaveFile.h"
+#include "vitamin_e/TrackedFrame.h"
+#include "vitamin_e/TsdfMeshingConfig.h"
+#include "vitamin_e/fusion/tsdf_volume.h"
+#include "vitamin_e/meshing/frame_mesher.h"
+#include "vitamin_e/meshing/nltgv_denoiser.h"
+#include "vitamin_e/ros/conversions.h"
+#include "vitamin_e/ros/mesh_markers.h"
+
+namespace vitamin_e_ros {
+
+namespace fusion = vitamin_e::fusion;
+namespace meshing = vitamin_e::meshing;
+
+class TsdfMeshingNodelet : public nodelet::Nodelet {
+ public:
+  ~TsdfMeshingNodelet() override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (tsdf_ && !mesh_file_.empty()) {
+      std::string message;
+      saveMesh(mesh_file_, &message);
+      std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());  // rosout may be gone at shutdown
+    }
+  }
+
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    pnh.param<std::string>("map_frame", map_frame_, "");
+    pnh.param<std::string>("mesh_file", mesh_file_, "");
+    pnh.param("denoise", denoise_, true);
+    fusion::TsdfConfig tsdf;
+    pnh.param("voxel_size", tsdf.voxel_size, tsdf.voxel_size);
+    pnh.param("truncation", tsdf.truncation, tsdf.truncation);
+    pnh.param("max_weight", tsdf.max_weight, tsdf.max_weight);
+    pnh.param("min_depth", tsdf.min_depth, tsdf.min_depth);
+    pnh.param("max_depth", tsdf.max_depth, tsdf.max_depth);
+    pnh.param("raster_downscale", tsdf.raster_downscale, tsdf.raster_downscale);
+    meshing::FrameMesherConfig mesher;
+    pnh.param("max_edge_px", mesher.max_edge_px, mesher.max_edge_px);
+    pnh.param("max_normal_angle_deg", mesher.max_normal_angle_deg, mesher.max_normal_angle_deg);
+    pnh.param("max_inv_depth_jump", mesher.max_inv_depth_jump, mesher.max_inv_depth_jump);
+    mesher.max_depth = std::min(mesher.max_depth, tsdf.max_depth);
+    try {
+      tsdf.validate();
+      mesher.validate();
+      tsdf_ = std::make_unique<fusion::TsdfVolume>(tsdf);
+      mesher_ = std::make_unique<meshing::FrameMesher>(mesher);
+      denoiser_ = std::make_unique<meshing::NltgvDenoiser>();
+    } catch (const std::exception& e) {
+      NODELET_FATAL("bad meshing parameter: %s (no subscription)", e.what());
+      return;
+    }
+    NODELET_INFO("TSDF voxel %.3f m, truncation %.3f m, depth [%.2f, %.2f] m, NLTGV %s", tsdf.voxel_size,
+                 tsdf.truncation, tsdf.min_depth, tsdf.max_depth, denoise_ ? "on" : "off");
+
+    mesh_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("mesh", 1, true);
+    save_srv_ = pnh.advertiseService("save_mesh", &TsdfMeshingNodelet::saveMeshService, this);
+    reconfigure_server_ =
+        std::make_unique<dynamic_reconfigure::Server<vitamin_e::TsdfMeshingConfig>>(reconfigure_mutex_, pnh);
+    reconfigure_server_->setCallback(
+        [this](vitamin_e::TsdfMeshingConfig& c, uint32_t level) { reconfigure(c, level); });
+    int queue_size = 100;
+    pnh.param("queue_size", queue_size, queue_size);
+    frame_sub_ = nh.subscribe("frame", static_cast<uint32_t>(std::max(1, queue_size)),
+                              &TsdfMeshingNodelet::frameCallback, this);
+    NODELET_INFO("fusing frames from %s", frame_sub_.getTopic().c_str());
+  }
+
+  void reconfigure(vitamin_e::TsdfMeshingConfig& config, uint32_t) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const bool period_changed = config.publish_period != dyn_.publish_period || !timer_.isValid();
+    dyn_ = config;
+    if (!period_changed) return;
+    timer_.stop();
+    if (dyn_.publish_period > 0.0) {
+      timer_ = getNodeHandle().createWallTimer(ros::WallDuration(dyn_.publish_period),
+                                               &TsdfMeshingNodelet::publishTimer, this);
+    }
+  }
+
+  void frameCallback(const vitamin_e::TrackedFrameConstPtr& msg) {
+    const std::size_t n = msg->ids.size();
+    if (msg->points_c.size() != n || msg->width == 0 || msg->height == 0) {
+      NODELET_ERROR_THROTTLE(2.0, "malformed frame %lu dropped (%zu ids, %zu points, %ux%u)",
+                             static_cast<unsigned long>(msg->frame_index), n, msg->points_c.size(), msg->width,
+                             msg->height);
+      return;
+    }
+    const Eigen::Isometry3d T_w_c = fromPoseMsg(msg->T_w_c);
+    if (!isFinite(T_w_c)) {
+      NODELET_ERROR_THROTTLE(2.0, "frame %lu with a non-finite pose dropped",
+                             static_cast<unsigned long>(msg->frame_index));
+      return;
+    }
+    meshing::PinholeIntrinsics K;
+    K.fx = msg->fx;
+    K.fy = msg->fy;
+    K.cx = msg->cx;
+    K.cy = msg->cy;
+    K.width = static_cast<int>(msg->width);
+    K.height = static_cast<int>(msg->height);
+    std::vector<Eigen::Vector3d> p_c;
+    p_c.reserve(n);
+    for (const auto& p : msg->points_c) p_c.emplace_back(p.x, p.y, p.z);
+
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!tsdf_) return;
+    if (map_frame_.empty()) map_frame_ = msg->header.frame_id.empty() ? "map" : msg->header.frame_id;
+    try {
+      K.validate();
+      meshing::FrameMesh mesh = mesher_->buildFromPoints(msg->ids, p_c, K);
+      if (denoise_ && mesh.triangles.size() > 0) {
+        denoiser_->denoise(&mesh, K);
+        mesher_->prune(&mesh, K);
+      }
+      if (!mesh.triangles.empty()) tsdf_->integrate(mesh, T_w_c, K);
+      ++frames_integrated_;
+      changed_ = true;
+    } catch (const std::exception& e) {
+      NODELET_ERROR_THROTTLE(2.0, "frame %lu not fused: %s", static_cast<unsigned long>(msg->frame_index),
+                             e.what());
+    }
+  }
+
+  void publishTimer(const ros::WallTimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!tsdf_ || !changed_ || mesh_pub_.getNumSubscribers() == 0) return;
+    changed_ = false;
+    const fusion::TriangleMesh mesh = tsdf_->extractMesh();
+    MeshMarkerOptions options;
+    options.frame_id = map_frame_.empty() ? "map" : map_frame_;
+    options.stamp = ros::Time::now();
+    options.triangles_per_marker = static_cast<std::size_t>(dyn_.triangles_per_marker);
+    options.color_by_height = dyn_.color_by_height;
+    visualization_msgs::MarkerArrayPtr markers(new visualization_msgs::MarkerArray);
+    std::size_t skipped = 0;
+    published_markers_ = meshToMarkers(mesh, options, published_markers_, markers.get(), &skipped);
+    if (skipped > 0) NODELET_ERROR_THROTTLE(2.0, "%zu non-finite triangles not published", skipped);
+    mesh_pub_.publish(visualization_msgs::MarkerArrayConstPtr(markers));
+    NODELET_DEBUG("mesh: %zu vertices, %zu triangles, %zu markers, %zu frames fused", mesh.vertices.size(),
+                  mesh.faces.size(), published_markers_, frames_integrated_);
+  }
+
+  bool saveMesh(const std::string& path, std::string* message) {
+    const fusion::TriangleMesh mesh = tsdf_->extractMesh();
+    std::string error;
+    if (!fusion::saveMeshPly(mesh, path, &error)) {
+      *message = "cannot write mesh " + path + ": " + error;
+      return false;
+    }
+    *message = "mesh (" + std::to_string(mesh.vertices.size()) + " vertices, " +
+               std::to_string(mesh.faces.size()) + " triangles, " + std::to_string(frames_integrated_) +
+               " frames, PLY) written to " + path;
+    changed_ = true;  // extractMesh consumed the change set: republish on the next tick
+    return true;
+  }
+
+  bool saveMeshService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std::string path = req.path.empty() ? mesh_file_ : req.path;
+    if (!tsdf_ || path.empty()) {
+      res.success = false;
+      res.message = !tsdf_ ? "no TSDF (bad parameters)" : "no path given and ~mesh_file not set";
+      return true;
+    }
+    res.success = saveMesh(path, &res.message);
+    NODELET_INFO("%s", res.message.c_str());
+    return true;
+  }
+
+  std::string map_frame_;
+  std::string mesh_file_;
+  bool denoise_ = true;
+  std::mutex mutex_;
+  vitamin_e::TsdfMeshingConfig dyn_;
+  std::unique_ptr<fusion::TsdfVolume> tsdf_;
+  std::unique_ptr<meshing::FrameMesher> mesher_;
+  std::unique_ptr<meshing::NltgvDenoiser> denoiser_;
+  std::size_t frames_integrated_ = 0;
+  std::size_t published_markers_ = 0;
+  bool changed_ = false;
+  ros::Subscriber frame_sub_;
+  ros::Publisher mesh_pub_;
+  ros::ServiceServer save_srv_;
+  ros::WallTimer timer_;
+  boost::recursive_mutex reconfigure_mutex_;
+  std::unique_ptr<dynamic_reconfigure::Server<vitamin_e::TsdfMeshingConfig>> reconfigure_server_;
+};
+
+}  // namespace vitamin_e_ros
+
+PLUGINLIB_EXPORT_CLASS(vitamin_e_ros::TsdfMeshingNodelet, nodelet::Nodelet)
