@@ -262,7 +262,7 @@ CameraCalibration loadKittiCalib(const std::string& path, int width, int height,
   calib.format = "kitti";
   calib.camera = makeCamera(path, width, height, P[0], P[5], P[2], P[6], DistortionModel::kNone, {});
   // P_i = K [I | t_i], t_i = cam0 origin seen from camera i; body = camera 0.
-  calib.T_b_c.translation() = -Eigen::Vector3d(P[3] / P[0], P[7] / P[5], P[11]);
+  calib.T_b_c.translation() = Eigen::Vector3d::Zero() - Eigen::Vector3d(P[3] / P[0], P[7] / P[5], P[11]);
   calib.rate_hz = 10.0;
   return calib;
 }
