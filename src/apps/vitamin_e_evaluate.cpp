@@ -2,6 +2,7 @@
 // (associate by timestamp, Sim(3) Umeyama alignment, ATE, RPE, success rate).
 //   vitamin_e_evaluate TRAJ GT [--frames N] [--max-dt S] [--body-to-camera YAML]
 //                      [--se3] [--rpe-delta S] [--kitti-times FILE] [--json] [--aligned-out FILE]
+//                      [--gt-out FILE] [--errors-out FILE]
 // TRAJ/GT: TUM, EuRoC csv or KITTI poses (auto-detected); GT may be a dataset
 // folder. Prints a summary, then the JSON result as the last line (--json: JSON only).
 // Bad input: one "error: ..." line on stderr, exit 2.
@@ -21,6 +22,7 @@ namespace {
 const char* kUsage =
     "usage: vitamin_e_evaluate TRAJ GT [--frames N] [--max-dt S] [--body-to-camera SENSOR_YAML]\n"
     "                          [--se3] [--rpe-delta S] [--kitti-times FILE] [--json] [--aligned-out FILE]\n"
+    "                          [--gt-out FILE] [--errors-out FILE]\n"
     "  TRAJ, GT          trajectory files: TUM 't tx ty tz qx qy qz qw', EuRoC ground-truth csv,\n"
     "                    or KITTI poses (auto-detected); GT may be a dataset folder\n"
     "  --frames N        number of input frames for the success rate (default: estimate poses)\n"
@@ -30,7 +32,9 @@ const char* kUsage =
     "  --rpe-delta S     time delta of the second RPE (default 1 s)\n"
     "  --kitti-times F   timestamps for KITTI poses files (default times.txt beside them, or 0.1 s steps)\n"
     "  --json            print only the JSON line\n"
-    "  --aligned-out F   write the aligned estimate (TUM) to F\n";
+    "  --aligned-out F   write the aligned estimate (TUM) to F\n"
+    "  --gt-out F        write the ground truth as used (TUM, camera poses) to F\n"
+    "  --errors-out F    write 't_estimate position_error_m' per matched pose to F\n";
 
 [[noreturn]] void fail(const std::string& msg) {
   std::cerr << "error: " << msg << "\n";
@@ -49,7 +53,7 @@ double parseDouble(const std::string& key, const std::string& v) {
 int main(int argc, char** argv) {
   std::vector<std::string> positional;
   ve::EvalConfig cfg;
-  std::string body_to_camera, aligned_out;
+  std::string body_to_camera, aligned_out, gt_out, errors_out;
   ve::ReadOptions gt_options;
   bool json_only = false;
   for (int i = 1; i < argc; ++i) {
@@ -75,6 +79,10 @@ int main(int argc, char** argv) {
       gt_options.kitti_times_path = next();
     } else if (a == "--aligned-out") {
       aligned_out = next();
+    } else if (a == "--gt-out") {
+      gt_out = next();
+    } else if (a == "--errors-out") {
+      errors_out = next();
     } else if (a == "--se3") {
       cfg.align_scale = false;
     } else if (a == "--json") {
@@ -101,6 +109,14 @@ int main(int argc, char** argv) {
     if (!body_to_camera.empty()) gt = ve::applyBodyToCamera(gt, ve::loadBodyToCamera(body_to_camera));
     const ve::EvalResult r = ve::evaluate(est, gt, cfg);
     if (!aligned_out.empty()) ve::writeTum(aligned_out, r.aligned);
+    if (!gt_out.empty()) ve::writeTum(gt_out, gt);
+    if (!errors_out.empty()) {
+      FILE* f = std::fopen(errors_out.c_str(), "w");
+      if (!f) fail(errors_out + ": cannot write");
+      std::fprintf(f, "# t_estimate[s] position_error[m]\n");
+      for (std::size_t k = 0; k < r.pairs.size(); ++k) std::fprintf(f, "%.9f %.9f\n", est[r.pairs[k].first].t, r.errors[k]);
+      std::fclose(f);
+    }
     if (!json_only) {
       std::cout << "estimate: " << positional[0] << " (" << ve::toString(ve::detectTrajectoryFormat(positional[0]))
                 << ")\nground truth: " << gt_path << " ("

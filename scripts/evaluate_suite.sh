@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# Runs vitamin_e on a list of sequences and prints the paper's table (Markdown).
+#   ./scripts/evaluate_suite.sh LIST [--out DIR] [--runs-only] [-- run_dataset.sh flags...]
+# LIST: one sequence per line, `NAME DATASET_PATH [GROUNDTRUTH]` ('#' comments).
+# GROUNDTRUTH defaults to DATASET_PATH/groundtruth_cam0_tum.txt when present.
+# Each sequence runs `./scripts/run_dataset.sh DATASET OUT/NAME` (writes
+# trajectory.txt and stats.json), then `./scripts/evaluate.sh` (Sim(3) ATE).
+# OUT defaults to out/suite. The table also goes to OUT/results.md.
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+[ $# -ge 1 ] || ve_die "usage: ./scripts/evaluate_suite.sh LIST [--out DIR] [-- run_dataset.sh flags...]"
+list="$1"; shift
+out="$VE_ROOT/out/suite"
+run_flags=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) [ $# -ge 2 ] || ve_die "--out needs a folder"; out="$2"; shift ;;
+    --) shift; run_flags=("$@"); break ;;
+    *) ve_die "evaluate_suite.sh: unknown option '$1'" ;;
+  esac
+  shift
+done
+[ -f "$list" ] || ve_die "$list: no such list file"
+mkdir -p "$out"
+py=/usr/bin/python3
+
+# Reads KEY (dotted path) from a JSON file; prints "" if absent.
+json_get() {
+  "$py" - "$1" "$2" <<'PYEOF'
+import json, sys
+try:
+    with open(sys.argv[1]) as fh:
+        v = json.load(fh)
+    for k in sys.argv[2].split("."):
+        v = v[k]
+    print(v)
+except Exception:
+    print("")
+PYEOF
+}
+# Reads KEY from a JSON text (one line) on stdin.
+json_line_get() {
+  "$py" -c 'import json,sys
+try:
+    v = json.loads(sys.stdin.read()).get(sys.argv[1], "")
+    print("" if v is None else v)
+except Exception:
+    print("")' "$1"
+}
+fmt() { "$py" -c 'import sys
+v = sys.argv[1]; s = float(sys.argv[2]); d = int(sys.argv[3])
+print(("%%.%df" % d) % (float(v) * s) if v not in ("", "None") else "n/a")' "$1" "$2" "$3"; }
+
+rows=()
+while read -r name dataset gt rest; do
+  [ -z "${name:-}" ] && continue
+  case "$name" in \#*) continue ;; esac
+  [ -n "${dataset:-}" ] || ve_die "$list: line for '$name' has no DATASET_PATH"
+  if [ -z "${gt:-}" ] && [ -f "$dataset/groundtruth_cam0_tum.txt" ]; then
+    gt="$dataset/groundtruth_cam0_tum.txt"
+  fi
+  run="$out/$name"
+  mkdir -p "$run"
+  ve_info "== $name: $dataset"
+  run_rc=0
+  "$VE_ROOT/scripts/run_dataset.sh" "$dataset" "$run" "${run_flags[@]}" >"$run/run.log" 2>&1 </dev/null || run_rc=$?
+  frames="$(json_get "$run/stats.json" frames)"
+  retries="$(json_get "$run/stats.json" init_retries)"
+  ms="$(json_get "$run/stats.json" timing_ms.total.mean)"
+  stats_success="$(json_get "$run/stats.json" success_rate)"
+  ate="" success="$stats_success" note=""
+  if [ "$run_rc" -ne 0 ]; then
+    note="run failed (exit $run_rc, log: $run/run.log)"
+  elif [ -z "${gt:-}" ]; then
+    note="no ground truth"
+  else
+    eval_args=("$run/trajectory.txt" "$gt")
+    [ -n "$frames" ] && eval_args+=(--frames "$frames")
+    if json="$("$VE_ROOT/scripts/evaluate.sh" "${eval_args[@]}" 2>"$run/evaluate.err" | tee "$run/evaluate.txt" | tail -n 1)"; then
+      ate="$(echo "$json" | json_line_get ate_rmse_m)"
+      success="$(echo "$json" | json_line_get success_rate)"
+    else
+      note="evaluation failed: $(tail -n 1 "$run/evaluate.err")"
+    fi
+  fi
+  ve_info "   ATE $(fmt "$ate" 100 2) cm, success $(fmt "$success" 100 1) %, retries ${retries:-n/a}, $(fmt "$ms" 1 1) ms/frame ${note}"
+  ate_cell="$(fmt "$ate" 100 1)"
+  [ -n "$note" ] && ate_cell="n/a ($note)"
+  # The paper counts a run under 90 % of frames tracked as a failure.
+  if [ -z "$note" ] && [ -n "$success" ] && "$py" -c 'import sys; sys.exit(0 if float(sys.argv[1]) < 0.9 else 1)' "$success"; then
+    ate_cell="fail ($ate_cell cm over $(fmt "$success" 100 1) % of frames)"
+  fi
+  rows+=("| $name | $ate_cell | $(fmt "$success" 100 1) | ${retries:-n/a} | $(fmt "$ms" 1 1) |")
+done <"$list"
+
+{
+  echo "| sequence | ATE [cm] | success [%] | init retries | ms/frame |"
+  echo "|---|---|---|---|---|"
+  for r in "${rows[@]}"; do echo "$r"; done
+} | tee "$out/results.md"
