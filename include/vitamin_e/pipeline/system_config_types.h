@@ -1,14 +1,39 @@
 #pragma once
-// The fields of SystemConfig (see system_config.h).
+// The fields of SystemConfig (see system_config.h). Each component keeps its own
+// Config struct; the pipeline's own parameters follow, with their defaults.
 #include <string>
+
+#include "vitamin_e/geometry/pnp.h"
+#include "vitamin_e/geometry/triangulation.h"
+#include "vitamin_e/geometry/two_view.h"
+#include "vitamin_e/map/map.h"
+#include "vitamin_e/optimization/subspace_gn.h"
+#include "vitamin_e/tracking/dense_tracker.h"
 
 namespace vitamin_e::pipeline {
 
 struct SystemConfig {
-  // Fields are added per component as the modules land (tracker, init, pnp, ba, map, mesh, tsdf).
-  int min_init_tracks = 200;  // 2D tracks needed to attempt initialization
+  tracking::TrackerConfig tracker;            // yaml section "tracker"
+  geometry::TwoViewConfig init;               // yaml section "init"
+  geometry::PnpConfig pnp;                    // yaml section "pnp"
+  geometry::TriangulationConfig triangulation;  // yaml section "triangulation"
+  optimization::BaOptions ba;                 // yaml section "ba"
+  map::MapConfig map;                         // yaml section "map"
 
-  void validate() const;        // throws ConfigError
+  // --- pipeline (yaml section "pipeline") ---
+  int min_init_tracks = 200;            // tracks shared with the reference frame needed to try initializing
+  double init_min_disparity_px = 20.0;  // median track displacement before the two-view fit is tried
+  int init_max_pending_frames = 60;     // frames kept since the reference; beyond it the reference moves on
+  int min_pose_inliers = 30;            // fewer P3P inliers than this: the frame is lost
+  int max_outlier_count = 2;            // times a point may be an outlier before it is removed
+  double max_reprojection_px = 3.0;     // observation residual after BA above which a point is flagged
+  int ba_fixed_keyframes = 2;           // oldest keyframes held fixed in the keyframe BA (gauge and scale)
+  int ba_keyframe_sweeps = 10;          // subspace GN sweeps when a keyframe is inserted
+  double keyframe_parallax_px = 20.0;   // rotation-compensated median parallax to the last keyframe
+  double keyframe_min_mapped_ratio = 0.5;  // fewer mapped tracks than this ratio also asks for a keyframe
+  double max_step_depth_ratio = 1.0;    // a per-frame step longer than this x scene depth is a failure
+
+  void validate() const;        // throws ConfigError naming the key
   std::string describe() const; // readable listing of every value
 };
 

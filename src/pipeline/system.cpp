@@ -1,0 +1,158 @@
+// pipeline::System: the public API and the per-frame dispatch.
+#include "vitamin_e/pipeline/system.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "system_impl.h"
+
+namespace vitamin_e::pipeline {
+
+namespace {
+// Pixel thresholds of the geometry stages are converted with the camera's focal length.
+SystemConfig withCameraFocal(SystemConfig config, const camera::Camera& camera) {
+  const double focal = 0.5 * (camera.fx() + camera.fy());
+  config.init.focal_px = focal;
+  config.pnp.focal_px = focal;
+  config.triangulation.focal_px = focal;
+  return config;
+}
+}  // namespace
+
+System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
+    : config(withCameraFocal(cfg, cam)), camera(cam), tracker(cfg.tracker), map(cfg.map) {}
+
+FrameResult System::Impl::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+  if (image.empty() || image.type() != CV_8UC1) {
+    throw std::invalid_argument("System::process: expected a non-empty 8-bit single-channel (mono8) image");
+  }
+  if (image.cols != camera.width() || image.rows != camera.height()) {
+    throw std::invalid_argument("System::process: image is " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + " but the calibration is " +
+                                std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+  }
+  FrameResult result;
+  result.timestamp = timestamp;
+  result.state = state;
+  if (!std::isfinite(timestamp) || (have_last_stamp && timestamp <= last_stamp)) {
+    result.frame_index = frame_index;
+    result.message = "frame skipped: timestamp " + std::to_string(timestamp) + " does not follow the previous " +
+                     std::to_string(last_stamp);
+    result.init_retries = init_retries;
+    return result;
+  }
+  have_last_stamp = true;
+  last_stamp = timestamp;
+  result.frame_index = frame_index;
+  cur_t = timestamp;
+  cur_text = timestamp_text;
+
+  const auto t_start = std::chrono::steady_clock::now();
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    tracking::TrackerFrame tf = tracker.track(image, timestamp);
+    cur_tracks.clear();
+    cur_tracks.reserve(tf.points.size());
+    for (const tracking::TrackedPoint& p : tf.points) {
+      FrameTrack t;
+      t.id = p.id;
+      t.uv = p.uv;
+      t.intensity = p.intensity;
+      if (!camera.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
+      cur_tracks.push_back(t);
+    }
+    const double ms = elapsedMs(t0);
+    timings.add("tracking", ms);
+    result.timing_ms["tracking"] = ms;
+  }
+
+  if (state == TrackingState::kTracking) {
+    track(&result);
+  } else {
+    initialize(&result);
+  }
+  result.state = state == TrackingState::kTracking && !result.pose_valid ? TrackingState::kLost : result.state;
+  fillResultPoints(&result);
+  result.num_tracked = cur_tracks.size();
+  result.map_size = map.landmarks().size();
+  result.init_retries = init_retries;
+  const double total = elapsedMs(t_start);
+  timings.add("total", total);
+  result.timing_ms["total"] = total;
+  ++frame_index;
+  return result;
+}
+
+void System::Impl::recordPose(std::uint64_t index, double t, const std::string& text, const Eigen::Isometry3d& T_w_c) {
+  if (!T_w_c.matrix().allFinite()) return;
+  TrajectoryEntry e;
+  e.timestamp = t;
+  e.timestamp_text = text;
+  e.T_w_c = T_w_c;
+  trajectory.push_back(e);
+  ++frames_tracked;
+  (void)index;
+}
+
+void System::Impl::fillResultPoints(FrameResult* result) const {
+  result->points.clear();
+  result->points.reserve(cur_tracks.size());
+  std::size_t mapped = 0;
+  for (const FrameTrack& t : cur_tracks) {
+    FramePoint p;
+    p.track_id = t.id;
+    p.uv = t.uv;
+    p.intensity = t.intensity;
+    if (const map::Landmark* l = map.landmark(t.id)) {
+      p.has_position = true;
+      p.p_w = l->p_w;
+      ++mapped;
+    }
+    result->points.push_back(p);
+  }
+  result->num_mapped = mapped;
+}
+
+void System::Impl::resetMap() {
+  map.clear();
+  pending.clear();
+  frames_since_keyframe = 0;
+  state = TrackingState::kInitializing;
+}
+
+System::System(const SystemConfig& config, const camera::Camera& camera) {
+  if (!camera.valid()) throw std::invalid_argument("System: the camera calibration is not set");
+  config.validate();
+  impl_ = std::make_unique<Impl>(config, camera);
+}
+
+System::~System() = default;
+
+FrameResult System::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+  return impl_->process(image, timestamp, timestamp_text);
+}
+
+void System::reset() {
+  impl_->resetMap();
+  impl_->tracker.reset();
+  impl_->have_last_pose = false;
+}
+
+const std::vector<TrajectoryEntry>& System::trajectory() const { return impl_->trajectory; }
+
+std::vector<MapPoint3> System::mapPoints() const {
+  std::vector<MapPoint3> out;
+  out.reserve(impl_->map.landmarks().size() + impl_->map.archive().size());
+  for (const auto& kv : impl_->map.landmarks()) out.push_back({kv.first, kv.second.p_w, kv.second.intensity});
+  for (const auto& a : impl_->map.archive()) out.push_back({0, a.p_w, a.intensity});
+  return out;
+}
+
+std::size_t System::framesProcessed() const { return impl_->frame_index; }
+std::size_t System::framesTracked() const { return impl_->frames_tracked; }
+int System::initRetries() const { return impl_->init_retries; }
+const StageTimings& System::timings() const { return impl_->timings; }
+const SystemConfig& System::config() const { return impl_->config; }
+const camera::Camera& System::camera() const { return impl_->camera; }
+
+}  // namespace vitamin_e::pipeline

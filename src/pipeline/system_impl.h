@@ -1,0 +1,81 @@
+#pragma once
+// Private state of pipeline::System (not installed).
+#include <deque>
+#include <unordered_map>
+#include <vector>
+
+#include "vitamin_e/map/map.h"
+#include "vitamin_e/pipeline/system.h"
+#include "vitamin_e/tracking/dense_tracker.h"
+
+namespace vitamin_e::pipeline {
+
+// A 2D track in the current frame, undistorted.
+struct FrameTrack {
+  std::uint64_t id;
+  Eigen::Vector2f uv;      // distorted pixel
+  Eigen::Vector2d xy;      // normalized undistorted
+  std::uint8_t intensity;
+};
+
+// A frame seen while initializing, localized once the map exists.
+struct PendingFrame {
+  std::uint64_t frame_index;
+  double timestamp;
+  std::string timestamp_text;
+  std::unordered_map<std::uint64_t, Eigen::Vector2d> xy;
+};
+
+struct System::Impl {
+  Impl(const SystemConfig& config, const camera::Camera& camera);
+
+  FrameResult process(const cv::Mat& image, double timestamp, const std::string& timestamp_text);
+  void resetMap();
+
+  // stages (system_init.cpp, system_track.cpp)
+  void initialize(FrameResult* result);
+  void track(FrameResult* result);
+  bool estimatePose(Eigen::Isometry3d* T_w_c, std::string* why);
+  void bundleAdjust(bool keyframe_window);
+  bool needKeyframe() const;
+  void insertKeyframe();
+  int triangulateNewPoints();
+  void localizePendingFrames();
+  void recordPose(std::uint64_t frame_index, double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
+  void fillResultPoints(FrameResult* result) const;
+
+  SystemConfig config;
+  camera::Camera camera;
+  tracking::DenseTracker tracker;
+  map::Map map;
+  StageTimings timings;
+
+  // stream state
+  std::uint64_t frame_index = 0;
+  std::uint64_t frames_tracked = 0;
+  bool have_last_stamp = false;
+  double last_stamp = 0.0;
+  int init_retries = 0;
+  bool initialized_once = false;
+  TrackingState state = TrackingState::kInitializing;
+
+  // current frame
+  double cur_t = 0.0;
+  std::string cur_text;
+  std::vector<FrameTrack> cur_tracks;
+  Eigen::Isometry3d T_w_cur = Eigen::Isometry3d::Identity();
+
+  // motion model
+  bool have_last_pose = false;
+  Eigen::Isometry3d T_w_last = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_last_prev = Eigen::Isometry3d::Identity();  // last relative motion (T_c_{k-1} <- c_k)
+  double scene_depth = 1.0;  // median depth of the map seen from the camera, map units
+
+  // initialization
+  std::deque<PendingFrame> pending;  // pending.front() is the reference frame
+  std::uint64_t frames_since_keyframe = 0;
+
+  std::vector<TrajectoryEntry> trajectory;
+};
+
+}  // namespace vitamin_e::pipeline

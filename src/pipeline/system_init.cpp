@@ -1,0 +1,168 @@
+// Monocular initialization: wait for parallax between a reference frame and the
+// current one, build the first two keyframes and landmarks from the essential
+// matrix, then localize the frames seen in between against that map.
+#include <algorithm>
+#include <cmath>
+
+#include "system_impl.h"
+#include "vitamin_e/geometry/pnp.h"
+#include "vitamin_e/geometry/two_view.h"
+
+namespace vitamin_e::pipeline {
+
+namespace {
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+}  // namespace
+
+void System::Impl::initialize(FrameResult* result) {
+  const auto t0 = std::chrono::steady_clock::now();
+  state = TrackingState::kInitializing;
+  result->state = TrackingState::kInitializing;
+  PendingFrame pf;
+  pf.frame_index = frame_index;
+  pf.timestamp = cur_t;
+  pf.timestamp_text = cur_text;
+  for (const FrameTrack& t : cur_tracks) pf.xy.emplace(t.id, t.xy);
+
+  auto restart_reference = [&](const std::string& why) {
+    pending.clear();
+    pending.push_back(std::move(pf));
+    result->message = why;
+  };
+
+  if (pending.empty()) {
+    restart_reference("initializing: reference frame set");
+    return;
+  }
+  const PendingFrame& ref = pending.front();
+  std::vector<Eigen::Vector2d> xy0, xy1;
+  std::vector<std::uint64_t> ids;
+  std::vector<double> disparity;
+  for (const FrameTrack& t : cur_tracks) {
+    auto it = ref.xy.find(t.id);
+    if (it == ref.xy.end()) continue;
+    xy0.push_back(it->second);
+    xy1.push_back(t.xy);
+    ids.push_back(t.id);
+    disparity.push_back((t.xy - it->second).norm() * camera.fx());
+  }
+  if (static_cast<int>(ids.size()) < config.min_init_tracks) {
+    restart_reference("initializing: too few tracks survive from the reference frame (" +
+                      std::to_string(ids.size()) + "); new reference");
+    return;
+  }
+  pending.push_back(pf);
+  while (static_cast<int>(pending.size()) > config.init_max_pending_frames) pending.erase(pending.begin() + 1);
+
+  const double med_disp = median(disparity);
+  if (med_disp < config.init_min_disparity_px) {
+    result->message = "initializing: waiting for parallax (median disparity " + std::to_string(med_disp) + " px)";
+    timings.add("init", elapsedMs(t0));
+    return;
+  }
+  geometry::TwoViewResult tv = geometry::initializeTwoView(xy0, xy1, config.init);
+  if (!tv.ok) {
+    result->message = "initializing: " + tv.reason;
+    if (pending.size() >= static_cast<std::size_t>(config.init_max_pending_frames)) {
+      PendingFrame cur = pending.back();
+      pending.clear();
+      pending.push_back(std::move(cur));
+      result->message += "; new reference";
+    }
+    timings.add("init", elapsedMs(t0));
+    return;
+  }
+
+  // Anchor: the first map defines the world (first reference camera = origin);
+  // after a loss, the new map continues from the last known pose at the last scale.
+  Eigen::Isometry3d T_w_c0 = Eigen::Isometry3d::Identity();
+  double scale = 1.0;
+  if (initialized_once && have_last_pose) {
+    T_w_c0 = T_w_last;
+    scale = scene_depth;
+  }
+  Eigen::Isometry3d T_c1_c0 = tv.T_c1_c0;
+  T_c1_c0.translation() *= scale;
+  const Eigen::Isometry3d T_w_c1 = T_w_c0 * T_c1_c0.inverse();
+
+  map.clear();
+  map::Keyframe kf0;
+  kf0.frame_index = ref.frame_index;
+  kf0.timestamp = ref.timestamp;
+  kf0.T_w_c = T_w_c0;
+  map::Keyframe kf1;
+  kf1.frame_index = frame_index;
+  kf1.timestamp = cur_t;
+  kf1.T_w_c = T_w_c1;
+  std::unordered_map<std::uint64_t, std::uint8_t> intensity;
+  for (const FrameTrack& t : cur_tracks) intensity[t.id] = t.intensity;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    kf0.observations.emplace(ids[i], xy0[i]);
+    kf1.observations.emplace(ids[i], xy1[i]);
+    if (i < tv.valid.size() && tv.valid[i]) {
+      map.addLandmark(ids[i], T_w_c0 * (scale * tv.points_c0[i]), intensity[ids[i]]);
+    }
+  }
+  // Tracks born after the reference: observed by the second keyframe only.
+  for (const FrameTrack& t : cur_tracks) kf1.observations.emplace(t.id, t.xy);
+  map.addKeyframe(std::move(kf0));
+  map.addKeyframe(std::move(kf1));
+  for (auto& kv : map.landmarks()) {
+    kv.second.last_seen_frame = frame_index;
+  }
+
+  T_w_cur = T_w_c1;
+  state = TrackingState::kTracking;
+  frames_since_keyframe = 0;
+  bundleAdjust(true);
+
+  const PendingFrame ref_copy = pending.front();
+  recordPose(ref_copy.frame_index, ref_copy.timestamp, ref_copy.timestamp_text, map.keyframes().front().T_w_c);
+  localizePendingFrames();
+  T_w_cur = map.keyframes().back().T_w_c;
+  recordPose(frame_index, cur_t, cur_text, T_w_cur);
+  // Motion model from the last localized in-between frame, if any.
+  T_last_prev = Eigen::Isometry3d::Identity();
+  if (trajectory.size() >= 2) {
+    const Eigen::Isometry3d& T_w_prev = trajectory[trajectory.size() - 2].T_w_c;
+    T_last_prev = T_w_prev.inverse() * T_w_cur;
+  }
+  T_w_last = T_w_cur;
+  have_last_pose = true;
+  initialized_once = true;
+  pending.clear();
+  result->state = TrackingState::kTracking;
+  result->pose_valid = true;
+  result->T_w_c = T_w_cur;
+  result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
+                    std::to_string(tv.median_parallax_deg) + " deg";
+  timings.add("init", elapsedMs(t0));
+}
+
+void System::Impl::localizePendingFrames() {
+  // Frames strictly between the reference and the current frame.
+  if (pending.size() < 3) return;
+  Eigen::Isometry3d guess = map.keyframes().front().T_w_c;
+  for (std::size_t k = 1; k + 1 < pending.size(); ++k) {
+    const PendingFrame& f = pending[k];
+    std::vector<Eigen::Vector3d> p_w;
+    std::vector<Eigen::Vector2d> xy;
+    for (const auto& kv : f.xy) {
+      if (const map::Landmark* l = map.landmark(kv.first)) {
+        p_w.push_back(l->p_w);
+        xy.push_back(kv.second);
+      }
+    }
+    if (static_cast<int>(p_w.size()) < config.min_pose_inliers) continue;
+    geometry::PnpResult r = geometry::solvePnpRansac(p_w, xy, config.pnp, &guess);
+    if (!r.ok || r.num_inliers < config.min_pose_inliers) continue;
+    recordPose(f.frame_index, f.timestamp, f.timestamp_text, r.T_w_c);
+    guess = r.T_w_c;
+  }
+}
+
+}  // namespace vitamin_e::pipeline

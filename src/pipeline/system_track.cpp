@@ -1,0 +1,288 @@
+// Tracking against the map: pose from P3P + RANSAC, subspace Gauss-Newton bundle
+// adjustment on every frame, keyframes by parallax, triangulation of new tracks.
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+#include "system_impl.h"
+#include "vitamin_e/geometry/pnp.h"
+#include "vitamin_e/geometry/triangulation.h"
+#include "vitamin_e/optimization/subspace_gn.h"
+
+namespace vitamin_e::pipeline {
+
+namespace {
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+}  // namespace
+
+void System::Impl::track(FrameResult* result) {
+  for (const FrameTrack& t : cur_tracks) {
+    if (map::Landmark* l = map.landmark(t.id)) l->last_seen_frame = frame_index;
+  }
+  std::string why;
+  Eigen::Isometry3d T_w_c;
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool ok = estimatePose(&T_w_c, &why);
+    const double ms = elapsedMs(t0);
+    timings.add("pose", ms);
+    result->timing_ms["pose"] = ms;
+    if (!ok) {
+      ++init_retries;
+      resetMap();
+      // This frame becomes the reference of the next initialization.
+      PendingFrame pf;
+      pf.frame_index = frame_index;
+      pf.timestamp = cur_t;
+      pf.timestamp_text = cur_text;
+      for (const FrameTrack& t : cur_tracks) pf.xy.emplace(t.id, t.xy);
+      pending.push_back(std::move(pf));
+      state = TrackingState::kLost;
+      result->state = TrackingState::kLost;
+      result->message = "lost: " + why + "; re-initializing";
+      return;
+    }
+  }
+  T_w_cur = T_w_c;
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    bundleAdjust(false);
+    const double ms = elapsedMs(t0);
+    timings.add("ba", ms);
+    result->timing_ms["ba"] = ms;
+  }
+  // A pose must be finite and must not jump: a step far beyond the scene depth
+  // is a failure, not motion.
+  const double step = (T_w_cur.translation() - T_w_last.translation()).norm();
+  if (!T_w_cur.matrix().allFinite() || step > config.max_step_depth_ratio * scene_depth) {
+    ++init_retries;
+    resetMap();
+    state = TrackingState::kLost;
+    result->state = TrackingState::kLost;
+    result->message = "lost: pose jumped by " + std::to_string(step) + " (scene depth " +
+                      std::to_string(scene_depth) + "); re-initializing";
+    return;
+  }
+  recordPose(frame_index, cur_t, cur_text, T_w_cur);
+  T_last_prev = T_w_last.inverse() * T_w_cur;
+  T_w_last = T_w_cur;
+  have_last_pose = true;
+  ++frames_since_keyframe;
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (needKeyframe()) {
+      insertKeyframe();
+      triangulateNewPoints();
+      bundleAdjust(true);
+      T_w_cur = map.keyframes().back().T_w_c;
+      T_w_last = T_w_cur;
+      if (!trajectory.empty()) trajectory.back().T_w_c = T_w_cur;
+    }
+    // Median depth of the mapped points in view: the map's scale at this place.
+    std::vector<double> depths;
+    const Eigen::Isometry3d T_c_w = T_w_cur.inverse();
+    for (const FrameTrack& t : cur_tracks) {
+      if (const map::Landmark* l = map.landmark(t.id)) depths.push_back((T_c_w * l->p_w).z());
+    }
+    if (depths.size() > 20) scene_depth = std::max(1e-6, median(depths));
+    const double ms = elapsedMs(t0);
+    timings.add("map", ms);
+    result->timing_ms["map"] = ms;
+  }
+  state = TrackingState::kTracking;
+  result->state = TrackingState::kTracking;
+  result->pose_valid = true;
+  result->T_w_c = T_w_cur;
+}
+
+bool System::Impl::estimatePose(Eigen::Isometry3d* T_w_c, std::string* why) {
+  std::vector<Eigen::Vector3d> p_w;
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<std::uint64_t> ids;
+  for (const FrameTrack& t : cur_tracks) {
+    if (const map::Landmark* l = map.landmark(t.id)) {
+      p_w.push_back(l->p_w);
+      xy.push_back(t.xy);
+      ids.push_back(t.id);
+    }
+  }
+  if (static_cast<int>(p_w.size()) < config.min_pose_inliers) {
+    *why = "only " + std::to_string(p_w.size()) + " tracked map points";
+    return false;
+  }
+  const Eigen::Isometry3d guess = T_w_last * T_last_prev;
+  geometry::PnpResult r = geometry::solvePnpRansac(p_w, xy, config.pnp, &guess);
+  if (!r.ok || r.num_inliers < config.min_pose_inliers) {
+    *why = "pose estimation failed (" + std::to_string(r.num_inliers) + " inliers of " + std::to_string(p_w.size()) +
+           ")";
+    return false;
+  }
+  std::vector<std::uint64_t> dropped;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (i < r.inliers.size() && !r.inliers[i]) {
+      map::Landmark* l = map.landmark(ids[i]);
+      if (l && ++l->outlier_count >= config.max_outlier_count) {
+        map.removeLandmark(ids[i]);
+        dropped.push_back(ids[i]);
+      }
+    }
+  }
+  if (!dropped.empty()) tracker.dropTracks(dropped);
+  *T_w_c = r.T_w_c;
+  return true;
+}
+
+void System::Impl::bundleAdjust(bool keyframe_window) {
+  optimization::BaProblem problem;
+  problem.fx = camera.fx();
+  problem.fy = camera.fy();
+  problem.cx = camera.cx();
+  problem.cy = camera.cy();
+  const auto& kfs = map.keyframes();
+  // Cameras: the window's keyframes; in per-frame mode the current frame is
+  // appended as the only free camera.
+  for (std::size_t k = 0; k < kfs.size(); ++k) {
+    optimization::BaCamera c;
+    c.T_w_c = kfs[k].T_w_c;
+    c.fixed = !keyframe_window || static_cast<int>(k) < config.ba_fixed_keyframes;
+    problem.cameras.push_back(c);
+  }
+  int current_cam = -1;
+  if (!keyframe_window) {
+    optimization::BaCamera c;
+    c.T_w_c = T_w_cur;
+    c.fixed = false;
+    current_cam = static_cast<int>(problem.cameras.size());
+    problem.cameras.push_back(c);
+  }
+  // Points: per frame, those the current frame sees; per keyframe, all in the window.
+  std::unordered_map<std::uint64_t, int> point_index;
+  std::vector<std::uint64_t> point_ids;
+  auto add_point = [&](std::uint64_t id) -> int {
+    auto it = point_index.find(id);
+    if (it != point_index.end()) return it->second;
+    const map::Landmark* l = map.landmark(id);
+    if (!l) return -1;
+    const int idx = static_cast<int>(problem.points.size());
+    problem.points.push_back({l->p_w, false});
+    point_index.emplace(id, idx);
+    point_ids.push_back(id);
+    return idx;
+  };
+  auto to_px = [&](const Eigen::Vector2d& xy) {
+    return Eigen::Vector2d(camera.fx() * xy.x() + camera.cx(), camera.fy() * xy.y() + camera.cy());
+  };
+  if (keyframe_window) {
+    for (std::size_t k = 0; k < kfs.size(); ++k) {
+      for (const auto& obs : kfs[k].observations) {
+        const int p = add_point(obs.first);
+        if (p >= 0) problem.observations.push_back({static_cast<int>(k), p, to_px(obs.second)});
+      }
+    }
+  } else {
+    for (const FrameTrack& t : cur_tracks) {
+      const int p = add_point(t.id);
+      if (p >= 0) problem.observations.push_back({current_cam, p, to_px(t.xy)});
+    }
+    for (std::size_t k = 0; k < kfs.size(); ++k) {
+      for (const auto& obs : kfs[k].observations) {
+        auto it = point_index.find(obs.first);
+        if (it != point_index.end()) problem.observations.push_back({static_cast<int>(k), it->second, to_px(obs.second)});
+      }
+    }
+  }
+  if (problem.points.empty()) return;
+  optimization::BaOptions options = config.ba;
+  if (keyframe_window) options.max_sweeps = config.ba_keyframe_sweeps;
+  const optimization::BaSummary summary = optimization::solveSubspaceGaussNewton(problem, options);
+
+  // Write back (only finite results).
+  for (std::size_t k = 0; k < kfs.size(); ++k) {
+    if (problem.cameras[k].T_w_c.matrix().allFinite()) map.keyframes()[k].T_w_c = problem.cameras[k].T_w_c;
+  }
+  if (current_cam >= 0 && problem.cameras[current_cam].T_w_c.matrix().allFinite()) {
+    T_w_cur = problem.cameras[current_cam].T_w_c;
+  }
+  for (std::size_t i = 0; i < point_ids.size(); ++i) {
+    if (map::Landmark* l = map.landmark(point_ids[i])) {
+      if (problem.points[i].p_w.allFinite()) l->p_w = problem.points[i].p_w;
+    }
+  }
+  // Observations far off after the optimization mark their points; repeated
+  // offenders are removed from the map and their tracks dropped.
+  std::unordered_set<std::uint64_t> bad;
+  for (std::size_t o = 0; o < problem.observations.size() && o < summary.residual_px.size(); ++o) {
+    if (summary.residual_px[o] > config.max_reprojection_px) bad.insert(point_ids[problem.observations[o].point]);
+  }
+  std::vector<std::uint64_t> dropped;
+  for (std::uint64_t id : bad) {
+    map::Landmark* l = map.landmark(id);
+    if (l && ++l->outlier_count >= config.max_outlier_count) {
+      map.removeLandmark(id);
+      dropped.push_back(id);
+    }
+  }
+  if (!dropped.empty()) tracker.dropTracks(dropped);
+}
+
+bool System::Impl::needKeyframe() const {
+  if (map.keyframes().empty()) return true;
+  const map::Keyframe& kf = map.keyframes().back();
+  const Eigen::Matrix3d R_cur_kf = (T_w_cur.inverse() * kf.T_w_c).rotation();
+  std::vector<double> parallax;
+  std::size_t mapped = 0;
+  for (const FrameTrack& t : cur_tracks) {
+    if (map.landmark(t.id)) ++mapped;
+    auto it = kf.observations.find(t.id);
+    if (it == kf.observations.end()) continue;
+    const Eigen::Vector3d f = R_cur_kf * it->second.homogeneous();
+    if (f.z() <= 1e-9) continue;
+    parallax.push_back((f.hnormalized() - t.xy).norm() * camera.fx());
+  }
+  const double med = median(parallax);
+  if (med >= config.keyframe_parallax_px) return true;
+  const double mapped_ratio = cur_tracks.empty() ? 0.0 : static_cast<double>(mapped) / cur_tracks.size();
+  return mapped_ratio < config.keyframe_min_mapped_ratio && med >= 0.3 * config.keyframe_parallax_px;
+}
+
+void System::Impl::insertKeyframe() {
+  map::Keyframe kf;
+  kf.frame_index = frame_index;
+  kf.timestamp = cur_t;
+  kf.T_w_c = T_w_cur;
+  for (const FrameTrack& t : cur_tracks) kf.observations.emplace(t.id, t.xy);
+  map.addKeyframe(std::move(kf));
+  frames_since_keyframe = 0;
+}
+
+int System::Impl::triangulateNewPoints() {
+  const auto& kfs = map.keyframes();
+  int created = 0;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector2d> obs;
+  for (const FrameTrack& t : cur_tracks) {
+    if (map.landmark(t.id)) continue;
+    poses.clear();
+    obs.clear();
+    for (const map::Keyframe& kf : kfs) {
+      auto it = kf.observations.find(t.id);
+      if (it == kf.observations.end()) continue;
+      poses.push_back(kf.T_w_c);
+      obs.push_back(it->second);
+    }
+    if (poses.size() < 2) continue;
+    geometry::TriangulationResult tr = geometry::triangulatePoint(poses, obs, config.triangulation);
+    if (!tr.ok) continue;
+    map::Landmark& l = map.addLandmark(t.id, tr.p_w, t.intensity);
+    l.num_observations = static_cast<int>(poses.size());
+    l.last_seen_frame = frame_index;
+    ++created;
+  }
+  return created;
+}
+
+}  // namespace vitamin_e::pipeline
