@@ -51,6 +51,10 @@ bool irlsStep(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Ve
 
 }  // namespace
 
+AffineFit refineAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
+                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0,
+                                   const AffineFitConfig& c, bool translation_first);
+
 AffineFit fitAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
                                 const AffineFitConfig& c) {
   if (x.size() != y.size()) throw std::invalid_argument("fitAffineGemanMcClure: x and y differ in size");
@@ -73,12 +77,30 @@ AffineFit fitAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std
       fit.b = t;
     }
   }
-  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
-  Eigen::Vector2d b = fit.b;
+  return refineAffineGemanMcClure(x, y, Eigen::Matrix2d::Identity(), fit.b, c, true);
+}
+
+AffineFit refineAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
+                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0,
+                                   const AffineFitConfig& c) {
+  return refineAffineGemanMcClure(x, y, A0, b0, c, false);
+}
+
+AffineFit refineAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
+                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0,
+                                   const AffineFitConfig& c, bool translation_first) {
+  if (x.size() != y.size()) throw std::invalid_argument("refineAffineGemanMcClure: x and y differ in size");
+  AffineFit fit;
+  const size_t n = x.size();
+  if (n == 0) return fit;
+  Eigen::Matrix2d A = A0;
+  Eigen::Vector2d b = b0;
   const bool affine = n >= 3;
   double sigma = std::max(c.sigma_start, c.sigma_final);
   // First settle the translation at the coarse scale, then fit the full affine.
-  for (int it = 0; it < c.iterations; ++it) irlsStep(x, y, sigma, &A, &b, false);
+  if (translation_first) {
+    for (int it = 0; it < c.iterations; ++it) irlsStep(x, y, sigma, &A, &b, false);
+  }
   while (true) {
     for (int it = 0; it < c.iterations; ++it) {
       Eigen::Matrix2d A1 = A;

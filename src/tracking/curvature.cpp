@@ -1,5 +1,6 @@
 #include "vitamin_e/tracking/curvature.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>

@@ -23,6 +23,8 @@ struct Track {
   Eigen::Vector2f uv = Eigen::Vector2f::Zero();
   int age = 0;
   float sign = 1.f;
+  float strength = 0.f;  // normalized |kappa| at the last position
+  Eigen::Vector2f resid = Eigen::Vector2f::Zero();  // last motion minus the dominant flow (parallax)
 };
 
 // Result of tracking one point into the current frame.
@@ -107,6 +109,8 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
   const float fb2 = static_cast<float>(cfg.fb_threshold_px * cfg.fb_threshold_px);
   const float min_k = std::max(static_cast<float>(cfg.min_track_curvature) * scale,
                                static_cast<float>(cfg.min_abs_curvature));
+  const float inv_scale = 1.f / scale;
+  const float max_ratio = static_cast<float>(cfg.max_curvature_ratio);
   steps.resize(tracks.size());
   auto work = [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
@@ -114,15 +118,18 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       Step& s = steps[i];
       s.ok = false;
       ClimbParams fwd{t.sign, static_cast<float>(cfg.lambda) * scale, sigma2, cfg.max_climb_steps, 2};
-      const Eigen::Vector2f pred = Af * t.uv + bf;
+      const Eigen::Vector2f r = cfg.predict_parallax ? t.resid : Eigen::Vector2f::Zero();
+      const Eigen::Vector2f pred = Af * t.uv + bf + r;
       if (!hillClimb(kappa, pred, fwd, &s.px)) continue;
       s.kappa = kappa.ptr<float>(s.px.y())[s.px.x()];
       if (t.sign * s.kappa < min_k) continue;
+      const float strength = t.sign * s.kappa * inv_scale;
+      if (strength > t.strength * max_ratio || strength * max_ratio < t.strength) continue;
       s.uv = refineSubpixel(kappa, s.px, t.sign);
       // Backward: climb the previous curvature from the inverse prediction.
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
       Eigen::Vector2i q;
-      if (!hillClimb(prev_kappa, Ainv * (s.uv - bf), bwd, &q)) continue;
+      if (!hillClimb(prev_kappa, Ainv * (s.uv - bf - r), bwd, &q)) continue;
       const Eigen::Vector2f qs = refineSubpixel(prev_kappa, q, t.sign);
       s.ok = (qs - t.uv).squaredNorm() <= fb2;
     }
@@ -185,6 +192,7 @@ int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Tra
     t.sign = e.kappa > 0.f ? 1.f : -1.f;
     t.uv = refineSubpixel(kappa, Eigen::Vector2i(e.x, e.y), t.sign);
     t.age = 0;
+    t.strength = std::fabs(e.kappa) / scale;
     fresh->push_back(t);
   }
   return static_cast<int>(fresh->size());
@@ -272,6 +280,29 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   }
   if (m.has_prev && !m.tracks.empty() && scale > 0.f) {
     m.trackAll(A, b, scale);
+    if (cfg.refine_flow) {
+      // Refit the dominant flow to the tracked extrema (thousands of precise
+      // pairs) and track again from the refined prediction.
+      std::vector<Eigen::Vector2d> xs, ys;
+      xs.reserve(m.tracks.size());
+      ys.reserve(m.tracks.size());
+      for (size_t i = 0; i < m.tracks.size(); ++i) {
+        if (!m.steps[i].ok) continue;
+        const Eigen::Vector2f r = cfg.predict_parallax ? m.tracks[i].resid : Eigen::Vector2f::Zero();
+        xs.push_back(m.tracks[i].uv.cast<double>());
+        ys.push_back((m.steps[i].uv - r).cast<double>());
+      }
+      AffineFitConfig fc{std::max(cfg.flow_sigma_px, 1.0), 1.0, 3, std::max(cfg.flow_min_matches, 30)};
+      const AffineFit fit = refineAffineGemanMcClure(xs, ys, A, b, fc);
+      if (fit.ok) {
+        A = fit.A;
+        b = fit.b;
+        out.A = A;
+        out.b = b;
+        out.flow_ok = true;
+        m.trackAll(A, b, scale);
+      }
+    }
     // Two tracks on one pixel: keep the older one.
     for (size_t i = 0; i < m.tracks.size(); ++i) {
       if (!m.steps[i].ok) continue;
@@ -292,8 +323,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       }
       if (!s.ok) continue;
       Track tr = m.tracks[i];
+      tr.resid = s.uv - (A.cast<float>() * tr.uv + b.cast<float>());
       tr.uv = s.uv;
       tr.age += 1;
+      tr.strength = tr.sign * s.kappa / scale;
       m.next_tracks.push_back(tr);
     }
   }

@@ -42,6 +42,7 @@ void TrackerConfig::validate() const {
   require(std::isfinite(fb_threshold_px) && fb_threshold_px > 0.0, "fb_threshold_px", "must be > 0");
   require(std::isfinite(min_track_curvature) && min_track_curvature >= 0.0, "min_track_curvature",
           "must be finite and >= 0");
+  require(std::isfinite(max_curvature_ratio) && max_curvature_ratio >= 1.0, "max_curvature_ratio", "must be >= 1");
   require(threads >= 1 && threads <= 64, "threads", "must be in [1, 64]");
 }
 

@@ -29,7 +29,7 @@ struct TrackerConfig {
   int max_per_cell = 2;             // live points allowed per cell (>= 1)
   int nms_radius_px = 2;            // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
   int border_px = 8;                // no point closer than this to the image border (>= 2)
-  double smoothing_sigma = 1.0;     // Gaussian pre-smoothing before derivatives [px] (0 = none)
+  double smoothing_sigma = 2.0;     // Gaussian pre-smoothing before derivatives [px] (0 = none)
   double min_curvature = 1.0;       // detection threshold on |kappa| / median|kappa| (>= 0)
   double min_abs_curvature = 0.5;   // absolute floor on |kappa| [DN^3/px^4]; flat/black images give nothing
   // --- dominant flow (BRIEF on a shrunk image + Geman-McClure affine fit) ---
@@ -43,11 +43,14 @@ struct TrackerConfig {
   int flow_iterations = 5;          // IRLS iterations per annealing level (>= 1)
   int flow_min_matches = 8;         // fewer inliers than this: flow_ok = false, identity + previous b used
   // --- extrema tracking ---
-  double lambda = 2.0;              // weight of the prediction prior in F, in normalized-curvature units (>= 0)
-  double track_sigma_px = 3.0;      // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
+  double lambda = 8.0;              // weight of the prediction prior in F, in normalized-curvature units (>= 0)
+  double track_sigma_px = 1.5;      // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
   int max_climb_steps = 12;         // hill-climbing steps (8-neighbour moves) before giving up (>= 1)
   double fb_threshold_px = 1.0;     // forward-backward check: max distance back to the old position [px] (> 0)
   double min_track_curvature = 0.5; // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
+  double max_curvature_ratio = 1.5; // ... or when its normalized |kappa| changes by more than this factor (>= 1)
+  bool refine_flow = true;          // refit A, b to the tracked points (GM, down to 1 px) and track again from it
+  bool predict_parallax = true;     // add each point's last residual to the dominant flow (x_bar = A x + b + r)
   // --- execution ---
   int threads = 2;                  // stripes run in parallel (cv::parallel_for_); 1 = serial (>= 1)
 

@@ -1,0 +1,358 @@
+// Benchmark of the dense curvature-extrema tracker against OpenCV KLT on a
+// render of /work/shared/tools/render_sequence.py, with exact ground truth:
+// the 3D point behind a tracked pixel of frame k-1 (undistort, ray-cast into the
+// scene's room and boxes) is projected (with distortion) into frame k; a track
+// step is an inlier when it lands within 1 px of that reprojection.
+//   bench_tracking_render RENDER_DIR [--frames N] [--max-points N] [--threads N]
+// Prints a table and, as the last line, a JSON summary.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "vitamin_e/common/timing.h"
+#include "vitamin_e/tracking/dense_tracker.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+namespace vt = vitamin_e::tracking;
+
+// ---- camera (EuRoC cam0 radtan), read from scene.json-compatible constants ----
+struct Radtan {
+  double fu = 458.654, fv = 457.296, cu = 367.215, cv = 248.375;
+  double k1 = -0.28340811, k2 = 0.07395907, p1 = 0.00019359, p2 = 1.76187114e-05;
+  int w = 752, h = 480;
+  Eigen::Vector2d distort(const Eigen::Vector2d& n) const {
+    const double x = n.x(), y = n.y(), r2 = x * x + y * y;
+    const double rad = 1 + k1 * r2 + k2 * r2 * r2;
+    const double xd = x * rad + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
+    const double yd = y * rad + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
+    return {fu * xd + cu, fv * yd + cv};
+  }
+  // Distorted pixel -> normalized, Gauss-Newton with a numeric Jacobian.
+  Eigen::Vector2d undistort(const Eigen::Vector2d& uv) const {
+    Eigen::Vector2d n((uv.x() - cu) / fu, (uv.y() - cv) / fv);
+    for (int it = 0; it < 20; ++it) {
+      const Eigen::Vector2d r = distort(n) - uv;
+      if (r.squaredNorm() < 1e-20) break;
+      const double h = 1e-7;
+      Eigen::Matrix2d J;
+      J.col(0) = (distort(n + Eigen::Vector2d(h, 0)) - distort(n)) / h;
+      J.col(1) = (distort(n + Eigen::Vector2d(0, h)) - distort(n)) / h;
+      n -= J.inverse() * r;
+    }
+    return n;
+  }
+};
+
+// ---- scene: room (seen from inside) + axis-aligned boxes (seen from outside) ----
+struct Aabb {
+  Eigen::Vector3d lo, hi;
+};
+struct Scene {
+  Aabb room;
+  std::vector<Aabb> boxes;
+  // Distance along unit ray d from o to the nearest surface; < 0 if none.
+  double cast(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
+    double best = 1e30;
+    double t_exit = 1e30;
+    for (int a = 0; a < 3; ++a) {
+      if (std::fabs(d[a]) < 1e-12) continue;
+      const double t = d[a] > 0 ? (room.hi[a] - o[a]) / d[a] : (room.lo[a] - o[a]) / d[a];
+      t_exit = std::min(t_exit, t);
+    }
+    if (t_exit > 0) best = t_exit;
+    for (const Aabb& b : boxes) {
+      double t0 = -1e30, t1 = 1e30;
+      bool miss = false;
+      for (int a = 0; a < 3 && !miss; ++a) {
+        if (std::fabs(d[a]) < 1e-12) {
+          if (o[a] < b.lo[a] || o[a] > b.hi[a]) miss = true;
+          continue;
+        }
+        double ta = (b.lo[a] - o[a]) / d[a], tb = (b.hi[a] - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+      }
+      if (!miss && t0 <= t1 && t0 > 1e-6) best = std::min(best, t0);
+    }
+    return best < 1e29 ? best : -1.0;
+  }
+};
+
+std::vector<double> numbersAfter(const std::string& s, size_t pos, int n) {
+  std::vector<double> v;
+  pos = s.find('[', pos);
+  while (static_cast<int>(v.size()) < n && pos != std::string::npos) {
+    pos = s.find_first_of("-0123456789", pos);
+    if (pos == std::string::npos) break;
+    size_t used = 0;
+    v.push_back(std::stod(s.substr(pos, 40), &used));
+    pos += used;
+  }
+  if (static_cast<int>(v.size()) != n) throw std::runtime_error("scene.json: malformed numbers");
+  return v;
+}
+
+Aabb aabbAt(const std::string& s, size_t pos) {
+  const auto lo = numbersAfter(s, s.find("\"min\"", pos), 3);
+  const auto hi = numbersAfter(s, s.find("\"max\"", pos), 3);
+  return {Eigen::Vector3d(lo[0], lo[1], lo[2]), Eigen::Vector3d(hi[0], hi[1], hi[2])};
+}
+
+Scene loadScene(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("cannot open " + path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string s = ss.str();
+  Scene sc;
+  sc.room = aabbAt(s, s.find("\"room\""));
+  const size_t b0 = s.find("\"boxes\""), b1 = s.find("\"lights\"");
+  for (size_t p = s.find("\"min\"", b0); p != std::string::npos && p < b1; p = s.find("\"min\"", p + 5)) {
+    sc.boxes.push_back(aabbAt(s, p));
+  }
+  return sc;
+}
+
+std::string nsOfTum(const std::string& t) {  // "1403715284.314640000" -> ns string
+  const size_t dot = t.find('.');
+  std::string frac = dot == std::string::npos ? "" : t.substr(dot + 1);
+  frac.resize(9, '0');
+  return t.substr(0, dot) + frac;
+}
+
+struct Frame {
+  std::string ns, file;
+  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
+};
+
+std::vector<Frame> loadFrames(const std::string& dir) {
+  std::map<std::string, Eigen::Isometry3d> gt;
+  std::ifstream g(dir + "/groundtruth_cam0_tum.txt");
+  std::string line;
+  while (std::getline(g, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream is(line);
+    std::string ts;
+    double tx, ty, tz, qx, qy, qz, qw;
+    is >> ts >> tx >> ty >> tz >> qx >> qy >> qz >> qw;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(tx, ty, tz);
+    gt[nsOfTum(ts)] = T;
+  }
+  std::vector<Frame> frames;
+  std::ifstream c(dir + "/mav0/cam0/data.csv");
+  while (std::getline(c, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    const size_t comma = line.find(',');
+    Frame fr;
+    fr.ns = line.substr(0, comma);
+    fr.file = dir + "/mav0/cam0/data/" + line.substr(comma + 1);
+    while (!fr.file.empty() && (fr.file.back() == '\r' || fr.file.back() == ' ')) fr.file.pop_back();
+    auto it = gt.find(fr.ns);
+    if (it == gt.end()) continue;
+    fr.T_w_c = it->second;
+    frames.push_back(fr);
+  }
+  return frames;
+}
+
+// Ground-truth reprojection of pixel uv of frame a into frame b; false when
+// the point leaves the image, has no surface or is occluded in b.
+bool reproject(const Radtan& cam, const Scene& sc, const Frame& a, const Frame& b, const Eigen::Vector2d& uv,
+               Eigen::Vector2d* out) {
+  const Eigen::Vector2d n = cam.undistort(uv);
+  const Eigen::Vector3d d = (a.T_w_c.linear() * Eigen::Vector3d(n.x(), n.y(), 1.0)).normalized();
+  const Eigen::Vector3d o = a.T_w_c.translation();
+  const double t = sc.cast(o, d);
+  if (t <= 0) return false;
+  const Eigen::Vector3d X = o + t * d;
+  const Eigen::Vector3d pc = b.T_w_c.inverse() * X;
+  if (pc.z() < 0.05) return false;
+  const Eigen::Vector3d ob = b.T_w_c.translation();
+  const double dist = (X - ob).norm();
+  if (sc.cast(ob, (X - ob) / dist) < dist - 0.01) return false;  // occluded in b
+  *out = cam.distort(Eigen::Vector2d(pc.x() / pc.z(), pc.y() / pc.z()));
+  return out->x() >= 0 && out->y() >= 0 && out->x() <= cam.w - 1 && out->y() <= cam.h - 1;
+}
+
+struct RunStats {
+  std::vector<double> points, ms, lengths;
+  long inliers = 0, checked = 0;
+};
+
+double median(std::vector<double> v) { return vitamin_e::percentile(std::move(v), 50.0); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: %s RENDER_DIR [--frames N] [--max-points N] [--threads N]\n", argv[0]);
+    return 2;
+  }
+  const std::string dir = argv[1];
+  int max_frames = 1 << 30;
+  int run_klt = 1;
+  vt::TrackerConfig cfg;
+  for (int i = 2; i + 1 < argc; i += 2) {
+    const std::string k = argv[i];
+    if (k == "--frames") max_frames = std::stoi(argv[i + 1]);
+    else if (k == "--max-points") cfg.max_points = std::stoi(argv[i + 1]);
+    else if (k == "--threads") cfg.threads = std::stoi(argv[i + 1]);
+    else if (k == "--lambda") cfg.lambda = std::stod(argv[i + 1]);
+    else if (k == "--min-curvature") cfg.min_curvature = std::stod(argv[i + 1]);
+    else if (k == "--cell") cfg.grid_cell_px = std::stoi(argv[i + 1]);
+    else if (k == "--fb") cfg.fb_threshold_px = std::stod(argv[i + 1]);
+    else if (k == "--sigma") cfg.smoothing_sigma = std::stod(argv[i + 1]);
+    else if (k == "--ratio") cfg.max_curvature_ratio = std::stod(argv[i + 1]);
+    else if (k == "--refine") cfg.refine_flow = std::stoi(argv[i + 1]);
+    else if (k == "--parallax") cfg.predict_parallax = std::stoi(argv[i + 1]);
+    else if (k == "--nms") cfg.nms_radius_px = std::stoi(argv[i + 1]);
+    else if (k == "--track-sigma") cfg.track_sigma_px = std::stod(argv[i + 1]);
+    else if (k == "--min-track-curvature") cfg.min_track_curvature = std::stod(argv[i + 1]);
+    else if (k == "--per-cell") cfg.max_per_cell = std::stoi(argv[i + 1]);
+    else if (k == "--klt") run_klt = std::stoi(argv[i + 1]);
+    else { std::fprintf(stderr, "unknown option %s\n", k.c_str()); return 2; }
+  }
+  const Radtan cam;
+  const Scene scene = loadScene(dir + "/scene.json");
+  std::vector<Frame> frames = loadFrames(dir);
+  if (static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
+  if (frames.size() < 2) { std::fprintf(stderr, "need >= 2 frames with ground truth\n"); return 2; }
+  std::vector<cv::Mat> images;
+  for (const Frame& f : frames) images.push_back(cv::imread(f.file, cv::IMREAD_GRAYSCALE));
+
+  // ---- dense curvature-extrema tracker ----
+  RunStats ours;
+  vt::DenseTracker tracker(cfg);
+  std::unordered_map<std::uint64_t, Eigen::Vector2f> prev;
+  std::unordered_map<std::uint64_t, int> life;
+  std::vector<double> tracked_pf, flow_ok_pf;
+  std::map<std::string, std::vector<double>> stage;
+  int min_tracked = 1 << 30;
+  long hist[5] = {0, 0, 0, 0, 0};
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const auto t0 = Clock::now();
+    const vt::TrackerFrame tf = tracker.track(images[k], std::stod(frames[k].ns) * 1e-9);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    ours.points.push_back(tf.points.size());
+    ours.ms.push_back(ms);
+    for (const auto& kv : tf.timing_ms) stage[kv.first].push_back(kv.second);
+    if (k > 0) {
+      tracked_pf.push_back(tf.num_tracked);
+      flow_ok_pf.push_back(tf.flow_ok);
+      min_tracked = std::min(min_tracked, tf.num_tracked);
+    }
+    std::unordered_map<std::uint64_t, Eigen::Vector2f> cur;
+    for (const auto& p : tf.points) {
+      cur[p.id] = p.uv;
+      life[p.id] = p.age + 1;
+      if (p.age == 0 || k == 0) continue;
+      auto it = prev.find(p.id);
+      if (it == prev.end()) continue;
+      Eigen::Vector2d truth;
+      if (!reproject(cam, scene, frames[k - 1], frames[k], it->second.cast<double>(), &truth)) continue;
+      ++ours.checked;
+      const double e = (p.uv.cast<double>() - truth).norm();
+      if (e <= 1.0) ++ours.inliers;
+      ++hist[e < 0.25 ? 0 : e < 0.5 ? 1 : e < 1.0 ? 2 : e < 2.0 ? 3 : 4];
+    }
+    prev.swap(cur);
+  }
+  for (const auto& kv : life) ours.lengths.push_back(kv.second);
+
+  // ---- OpenCV KLT with the same number of points ----
+  RunStats klt;
+  const int n_klt = run_klt ? static_cast<int>(median(ours.points)) : 0;
+  std::vector<cv::Point2f> pts;
+  std::vector<int> ages;
+  std::vector<int> klt_life;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const auto t0 = Clock::now();
+    std::vector<cv::Point2f> next;
+    std::vector<int> next_age;
+    std::vector<cv::Point2f> from;
+    if (k > 0 && !pts.empty()) {
+      std::vector<unsigned char> st;
+      std::vector<float> err;
+      cv::calcOpticalFlowPyrLK(images[k - 1], images[k], pts, next, st, err, cv::Size(21, 21), 3);
+      size_t j = 0;
+      for (size_t i = 0; i < pts.size(); ++i) {
+        const cv::Point2f q = next[i];
+        if (!st[i] || q.x < 0 || q.y < 0 || q.x > cam.w - 1 || q.y > cam.h - 1) {
+          klt_life.push_back(ages[i] + 1);
+          continue;
+        }
+        next[j] = q;
+        from.push_back(pts[i]);
+        next_age.push_back(ages[i] + 1);
+        ++j;
+      }
+      next.resize(j);
+    }
+    const size_t n_tracked = next.size();
+    if (static_cast<int>(next.size()) < n_klt) {
+      cv::Mat mask(images[k].size(), CV_8UC1, cv::Scalar(255));
+      for (const auto& q : next) cv::circle(mask, q, 3, cv::Scalar(0), -1);
+      std::vector<cv::Point2f> fresh;
+      cv::goodFeaturesToTrack(images[k], fresh, n_klt - static_cast<int>(next.size()), 0.001, 3, mask);
+      for (const auto& q : fresh) { next.push_back(q); next_age.push_back(0); }
+    }
+    klt.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    klt.points.push_back(next.size());
+    for (size_t i = 0; i < n_tracked; ++i) {
+      Eigen::Vector2d truth;
+      if (!reproject(cam, scene, frames[k - 1], frames[k], Eigen::Vector2d(from[i].x, from[i].y), &truth)) continue;
+      ++klt.checked;
+      if ((Eigen::Vector2d(next[i].x, next[i].y) - truth).norm() <= 1.0) ++klt.inliers;
+    }
+    pts.swap(next);
+    ages.swap(next_age);
+  }
+  for (int a : ages) klt_life.push_back(a + 1);
+  for (int l : klt_life) klt.lengths.push_back(l);
+
+  auto pct = [](std::vector<double> v, double p) { return vitamin_e::percentile(std::move(v), p); };
+  const double our_ratio = ours.checked ? static_cast<double>(ours.inliers) / ours.checked : 0.0;
+  const double klt_ratio = klt.checked ? static_cast<double>(klt.inliers) / klt.checked : 0.0;
+  std::printf("render %s, %zu frames, 752x480, tracker threads=%d\n", dir.c_str(), frames.size(), cfg.threads);
+  std::printf("%-34s %14s %14s\n", "", "curv.extrema", "OpenCV KLT");
+  std::printf("%-34s %14.0f %14.0f\n", "points/frame median", median(ours.points), median(klt.points));
+  std::printf("%-34s %14.0f %14s\n", "tracked/frame median (min)", median(tracked_pf), "");
+  std::printf("%-34s %14d %14s\n", "tracked/frame min", min_tracked, "");
+  std::printf("%-34s %14.2f %14.2f\n", "ms/frame median", median(ours.ms), median(klt.ms));
+  std::printf("%-34s %14.2f %14.2f\n", "ms/frame p95", pct(ours.ms, 95), pct(klt.ms, 95));
+  std::printf("%-34s %14.0f %14.0f\n", "track length median [frames]", median(ours.lengths), median(klt.lengths));
+  std::printf("%-34s %14.4f %14.4f\n", "track steps within 1 px", our_ratio, klt_ratio);
+  std::printf("%-34s %14ld %14ld\n", "track steps checked", ours.checked, klt.checked);
+  std::printf("%-34s %14.3f %14s\n", "flow_ok fraction", flow_ok_pf.empty() ? 0.0 : std::accumulate(flow_ok_pf.begin(), flow_ok_pf.end(), 0.0) / flow_ok_pf.size(), "");
+  std::printf("%-34s %.3f %.3f %.3f %.3f %.3f\n", "error <.25 <.5 <1 <2 >=2 px", hist[0] / (double)ours.checked,
+              hist[1] / (double)ours.checked, hist[2] / (double)ours.checked, hist[3] / (double)ours.checked,
+              hist[4] / (double)ours.checked);
+  for (const auto& kv : stage) {
+    std::printf("  stage %-26s %8.2f ms median %8.2f ms p95\n", kv.first.c_str(), median(kv.second), pct(kv.second, 95));
+  }
+  std::printf("{\"points_per_frame_median\":%.0f,\"ms_per_frame_median\":%.3f,\"ms_per_frame_p95\":%.3f,"
+              "\"track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
+              "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f}\n",
+              median(ours.points), median(ours.ms), pct(ours.ms, 95), median(ours.lengths), our_ratio, min_tracked,
+              median(klt.points), median(klt.ms), klt_ratio);
+  return 0;
+}
