@@ -70,36 +70,6 @@ bool BriefExtractor::describe(const cv::Mat& img, int x, int y, BriefDescriptor*
   return true;
 }
 
-namespace {
-
-struct Best {
-  int idx = -1;
-  int d1 = INT_MAX;
-  int d2 = INT_MAX;
-};
-
-std::vector<Best> bestMatches(const std::vector<BriefDescriptor>& a, const std::vector<BriefDescriptor>& b,
-                              const std::vector<signed char>* sa, const std::vector<signed char>* sb) {
-  std::vector<Best> best(a.size());
-  for (size_t i = 0; i < a.size(); ++i) {
-    Best& bi = best[i];
-    for (size_t j = 0; j < b.size(); ++j) {
-      if (sa && sb && (*sa)[i] != (*sb)[j]) continue;
-      const int d = hammingDistance(a[i], b[j]);
-      if (d < bi.d1) {
-        bi.d2 = bi.d1;
-        bi.d1 = d;
-        bi.idx = static_cast<int>(j);
-      } else if (d < bi.d2) {
-        bi.d2 = d;
-      }
-    }
-  }
-  return best;
-}
-
-}  // namespace
-
 std::vector<std::pair<int, int>> matchBrief(const std::vector<BriefDescriptor>& a,
                                             const std::vector<BriefDescriptor>& b, const MatchConfig& c,
                                             const std::vector<signed char>* sign_a,
@@ -107,15 +77,33 @@ std::vector<std::pair<int, int>> matchBrief(const std::vector<BriefDescriptor>& 
   std::vector<std::pair<int, int>> out;
   if (a.empty() || b.empty()) return out;
   const bool use_sign = sign_a && sign_b && sign_a->size() == a.size() && sign_b->size() == b.size();
-  const auto ab = bestMatches(a, b, use_sign ? sign_a : nullptr, use_sign ? sign_b : nullptr);
-  std::vector<Best> ba;
-  if (c.cross_check) ba = bestMatches(b, a, use_sign ? sign_b : nullptr, use_sign ? sign_a : nullptr);
-  for (size_t i = 0; i < a.size(); ++i) {
-    const Best& m = ab[i];
-    if (m.idx < 0 || m.d1 > c.max_distance) continue;
-    if (c.ratio < 1.0 && m.d2 != INT_MAX && m.d1 >= c.ratio * m.d2) continue;
-    if (c.cross_check && ba[m.idx].idx != static_cast<int>(i)) continue;
-    out.emplace_back(static_cast<int>(i), m.idx);
+  const size_t na = a.size(), nb = b.size();
+  // One pass over the distance matrix: best and second best per row, best per column.
+  std::vector<int> best_a(na, -1), d1_a(na, INT_MAX), d2_a(na, INT_MAX);
+  std::vector<int> best_b(nb, -1), d1_b(nb, INT_MAX);
+  for (size_t i = 0; i < na; ++i) {
+    for (size_t j = 0; j < nb; ++j) {
+      if (use_sign && (*sign_a)[i] != (*sign_b)[j]) continue;
+      const int d = hammingDistance(a[i], b[j]);
+      if (d < d1_a[i]) {
+        d2_a[i] = d1_a[i];
+        d1_a[i] = d;
+        best_a[i] = static_cast<int>(j);
+      } else if (d < d2_a[i]) {
+        d2_a[i] = d;
+      }
+      if (d < d1_b[j]) {
+        d1_b[j] = d;
+        best_b[j] = static_cast<int>(i);
+      }
+    }
+  }
+  for (size_t i = 0; i < na; ++i) {
+    const int j = best_a[i];
+    if (j < 0 || d1_a[i] > c.max_distance) continue;
+    if (c.ratio < 1.0 && d2_a[i] != INT_MAX && d1_a[i] >= c.ratio * d2_a[i]) continue;
+    if (c.cross_check && best_b[j] != static_cast<int>(i)) continue;
+    out.emplace_back(static_cast<int>(i), j);
   }
   return out;
 }

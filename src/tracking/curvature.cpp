@@ -90,9 +90,24 @@ void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std
   border = std::max(border, r + 1);
   if (rows <= 2 * border || cols <= 2 * border) return;
   threshold = std::max(threshold, 1e-12f);
+  // Window maxima/minima by (SIMD) grey dilation/erosion; an extremum equals
+  // its window's max (or min) and is the only pixel of the window that does.
+  cv::Mat mx, mn;
+  const cv::Mat se = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * r + 1, 2 * r + 1));
+  cv::dilate(kappa, mx, se, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
+  cv::erode(kappa, mn, se, cv::Point(-1, -1), 1, cv::BORDER_REPLICATE);
   const int n = std::max(1, stripes);
   std::vector<std::vector<Extremum>> parts(n);
   const int span = rows - 2 * border;
+  auto unique = [&](int x, int y, float v) {  // no other pixel of the window reaches v
+    for (int dy = -r; dy <= r; ++dy) {
+      const float* rr = kappa.ptr<float>(y + dy);
+      for (int dx = -r; dx <= r; ++dx) {
+        if ((dx | dy) != 0 && rr[x + dx] == v) return false;
+      }
+    }
+    return true;
+  };
   auto work = [&](int s) {
     std::vector<Extremum>& part = parts[s];
     part.clear();
@@ -100,28 +115,13 @@ void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std
     const int y1 = border + static_cast<int>(static_cast<long>(span) * (s + 1) / n);
     for (int y = y0; y < y1; ++y) {
       const float* row = kappa.ptr<float>(y);
+      const float* rmx = mx.ptr<float>(y);
+      const float* rmn = mn.ptr<float>(y);
       for (int x = border; x < cols - border; ++x) {
         const float k = row[x];
-        if (std::fabs(k) < threshold) continue;
-        const float s_k = k > 0.f ? 1.f : -1.f;
-        const float v = s_k * k;
-        bool is_max = true;
-        // 3x3 first (cheap rejection), then the rest of the window.
-        for (int dy = -1; dy <= 1 && is_max; ++dy) {
-          const float* rr = kappa.ptr<float>(y + dy);
-          for (int dx = -1; dx <= 1; ++dx) {
-            if ((dx | dy) == 0) continue;
-            if (s_k * rr[x + dx] >= v) { is_max = false; break; }
-          }
+        if ((k >= threshold && k == rmx[x]) || (k <= -threshold && k == rmn[x])) {
+          if (unique(x, y, k)) part.push_back({x, y, k});
         }
-        for (int dy = -r; dy <= r && is_max; ++dy) {
-          const float* rr = kappa.ptr<float>(y + dy);
-          for (int dx = -r; dx <= r; ++dx) {
-            if (std::abs(dx) <= 1 && std::abs(dy) <= 1) continue;
-            if (s_k * rr[x + dx] >= v) { is_max = false; break; }
-          }
-        }
-        if (is_max) part.push_back({x, y, k});
       }
     }
   };

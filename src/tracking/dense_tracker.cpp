@@ -240,6 +240,11 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
 
   auto t = Clock::now();
   computeCurvature(gray, cfg.smoothing_sigma, &m.kappa, cfg.threads);
+  if (cfg.kappa_smoothing_sigma > 0.0) {
+    const int k = 2 * static_cast<int>(std::ceil(2.5 * cfg.kappa_smoothing_sigma)) + 1;
+    cv::GaussianBlur(m.kappa, m.kappa, cv::Size(k, k), cfg.kappa_smoothing_sigma, cfg.kappa_smoothing_sigma,
+                     cv::BORDER_REFLECT101);
+  }
   const float scale = robustCurvatureScale(m.kappa);
   out.timing_ms["curvature"] = msSince(t);
 

@@ -30,6 +30,7 @@ struct TrackerConfig {
   int nms_radius_px = 2;            // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
   int border_px = 8;                // no point closer than this to the image border (>= 2)
   double smoothing_sigma = 2.0;     // Gaussian pre-smoothing before derivatives [px] (0 = none)
+  double kappa_smoothing_sigma = 0.0;  // Gaussian smoothing of kappa itself before extrema/tracking [px] (0 = none)
   double min_curvature = 1.0;       // detection threshold on |kappa| / median|kappa| (>= 0)
   double min_abs_curvature = 0.5;   // absolute floor on |kappa| [DN^3/px^4]; flat/black images give nothing
   // --- dominant flow (BRIEF on a shrunk image + Geman-McClure affine fit) ---
