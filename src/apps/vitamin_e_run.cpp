@@ -1,0 +1,267 @@
+// vitamin_e_run: runs VITAMIN-E SLAM offline over a dataset, as fast as possible.
+//   vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]
+//                 [--max-frames N] [--start-frame N] [--quiet]
+// PATH: EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder, KITTI odometry
+// folder, or a .bag (ROS builds). Writes DIR/trajectory.txt (TUM, T_w_c),
+// DIR/stats.json and DIR/points.ply. SIGINT/SIGTERM stop after the current frame
+// and still write everything. Bad input: one "error: ..." line, exit code 2.
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "vitamin_e/io/dataset.h"
+#include "vitamin_e/io/run_report.h"
+#include "vitamin_e/pipeline/system.h"
+#ifdef VITAMIN_E_WITH_ROS
+#include "vitamin_e/ros/bag_dataset.h"
+#endif
+
+namespace fs = std::filesystem;
+namespace io = vitamin_e::io;
+namespace pl = vitamin_e::pipeline;
+
+namespace {
+
+const char* kUsage =
+    "usage: vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]\n"
+    "                     [--max-frames N] [--start-frame N] [--quiet]\n"
+    "  --dataset PATH   EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder (rgb.txt),\n"
+    "                   KITTI odometry folder (image_0/ or image_l/, calib.txt) or a .bag\n"
+    "  --out DIR        output folder: trajectory.txt (TUM, T_w_c), stats.json, points.ply\n"
+    "  --config YAML    system configuration (default: built-in defaults)\n"
+    "  --calib FILE     calibration (EuRoC sensor.yaml, Kalibr camchain, ROS camera_info yaml,\n"
+    "                   KITTI calib.txt); required for bags and TUM folders without camera.yaml\n"
+    "  --topic T        image topic of a bag (default /cam0/image_raw)\n"
+    "  --max-frames N   process at most N frames\n"
+    "  --start-frame N  skip the first N frames\n"
+    "  --quiet          no progress and no summary\n";
+
+volatile std::sig_atomic_t g_stop = 0;
+extern "C" void onSignal(int) { g_stop = 1; }
+
+[[noreturn]] void fail(const std::string& msg) {
+  std::cerr << "error: " << msg << std::endl;
+  std::exit(2);
+}
+
+struct Options {
+  std::string dataset, out, config, calib, topic = "/cam0/image_raw";
+  std::size_t max_frames = 0;  // 0 = all
+  std::size_t start_frame = 0;
+  bool quiet = false;
+};
+
+std::size_t parseCount(const std::string& key, const std::string& v) {
+  std::size_t pos = 0;
+  long long n = -1;
+  try {
+    n = std::stoll(v, &pos);
+  } catch (const std::exception&) {
+  }
+  if (pos != v.size() || n < 0) fail(key + " needs a non-negative integer, got '" + v + "'");
+  return static_cast<std::size_t>(n);
+}
+
+Options parseArgs(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      std::exit(0);
+    }
+    if (a == "--quiet" || a == "-q") {
+      o.quiet = true;
+      continue;
+    }
+    if (i + 1 >= argc) fail(a.rfind("--", 0) == 0 ? a + " needs a value" : "unexpected argument '" + a + "'");
+    const std::string v = argv[++i];
+    if (a == "--dataset") o.dataset = v;
+    else if (a == "--out") o.out = v;
+    else if (a == "--config") o.config = v;
+    else if (a == "--calib") o.calib = v;
+    else if (a == "--topic") o.topic = v;
+    else if (a == "--max-frames") o.max_frames = parseCount(a, v);
+    else if (a == "--start-frame") o.start_frame = parseCount(a, v);
+    else fail("unknown option '" + a + "' (see --help)");
+  }
+  if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
+  if (o.out.empty()) fail("--out DIR is required (see --help)");
+  return o;
+}
+
+std::unique_ptr<io::Dataset> openInput(const Options& o) {
+  io::DatasetOptions dopt;
+  dopt.calibration_path = o.calib;
+  dopt.bag_topic = o.topic;
+#ifdef VITAMIN_E_WITH_ROS
+  return vitamin_e_ros::openAnyDataset(o.dataset, dopt);
+#else
+  if (io::detectDatasetKind(o.dataset) == "rosbag")
+    throw io::DatasetError("'" + o.dataset + "' is a rosbag but this build has no ROS layer");
+  return io::openDataset(o.dataset, dopt);
+#endif
+}
+
+pl::SystemConfig loadConfig(const std::string& path) {
+  if (path.empty()) {
+    pl::SystemConfig config;
+    config.validate();
+    return config;
+  }
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw pl::ConfigError("config file '" + path + "' does not exist");
+  return pl::loadSystemConfig(path);
+}
+
+// Progress: a bar redrawn in place on a terminal, a plain line every ~5 s otherwise.
+class Progress {
+ public:
+  Progress(std::size_t total, bool quiet) : total_(total), quiet_(quiet), tty_(::isatty(2) == 1) {}
+  void update(std::size_t done, std::size_t tracked, bool force = false) {
+    if (quiet_) return;
+    const double now = vitamin_e::elapsedMs(start_) / 1000.0;
+    if (!force && now - last_ < (tty_ ? 0.1 : 5.0)) return;
+    last_ = now;
+    const double ratio = done ? static_cast<double>(tracked) / static_cast<double>(done) : 0.0;
+    if (tty_) {
+      std::fprintf(stderr, "\r%s\033[K", io::formatProgress(done, total_, now, ratio, 30).c_str());
+    } else {
+      std::fprintf(stderr, "[vitamin_e_run] %s\n", io::formatProgress(done, total_, now, ratio, 0).c_str());
+    }
+    std::fflush(stderr);
+  }
+  void finish(std::size_t done, std::size_t tracked) {
+    update(done, tracked, true);
+    if (!quiet_ && tty_) std::fputc('\n', stderr);
+  }
+  void warn(const std::string& msg) {
+    if (tty_ && !quiet_) std::fputs("\r\033[K", stderr);
+    std::fprintf(stderr, "warning: %s\n", msg.c_str());
+  }
+
+ private:
+  std::size_t total_;
+  bool quiet_, tty_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  double last_ = -1e9;
+};
+
+int run(const Options& o) {
+  const pl::SystemConfig config = loadConfig(o.config);
+  const std::unique_ptr<io::Dataset> dataset = openInput(o);
+  if (o.start_frame >= dataset->size()) {
+    fail("--start-frame " + std::to_string(o.start_frame) + " is past the end of '" + o.dataset + "' (" +
+         std::to_string(dataset->size()) + " frames)");
+  }
+  std::size_t end = dataset->size();
+  if (o.max_frames > 0) end = std::min(end, o.start_frame + o.max_frames);
+
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec || !fs::is_directory(o.out, ec)) fail("cannot create output folder '" + o.out + "'");
+  const std::string traj_path = (fs::path(o.out) / "trajectory.txt").string();
+  const std::string stats_path = (fs::path(o.out) / "stats.json").string();
+  const std::string ply_path = (fs::path(o.out) / "points.ply").string();
+  if (!std::ofstream(stats_path)) fail("output folder '" + o.out + "' is not writable");
+
+  const vitamin_e::camera::CameraCalibration& calib = dataset->calibration();
+  if (!o.quiet) {
+    std::fprintf(stderr, "[vitamin_e_run] %s dataset '%s': %zu frames, processing %zu..%zu\n",
+                 dataset->kind().c_str(), o.dataset.c_str(), dataset->size(), o.start_frame, end - 1);
+    std::fprintf(stderr, "[vitamin_e_run] camera (%s): %s\n", calib.format.c_str(), calib.camera.describe().c_str());
+  }
+  pl::System slam(config, calib.camera);
+
+  io::RunStats stats;
+  stats.dataset = o.dataset;
+  stats.dataset_kind = dataset->kind();
+  stats.config = o.config;
+  struct sigaction sa {};
+  sa.sa_handler = onSignal;
+  sa.sa_flags = SA_RESETHAND;  // a second signal ends the process the default way
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+
+  Progress progress(end - o.start_frame, o.quiet);
+  const auto t_start = std::chrono::steady_clock::now();
+  std::size_t attempted = 0;
+  for (std::size_t i = o.start_frame; i < end && !g_stop; ++i) {
+    ++attempted;
+    cv::Mat image;
+    const auto t_load = std::chrono::steady_clock::now();
+    try {
+      image = dataset->loadImage(i);
+    } catch (const io::DatasetError& e) {
+      progress.warn(std::string(e.what()) + " (frame " + std::to_string(i) + " skipped)");
+      ++stats.skipped_frames;
+      continue;
+    }
+    const double load_ms = vitamin_e::elapsedMs(t_load);
+    const auto t0 = std::chrono::steady_clock::now();
+    const pl::FrameResult r = slam.process(image, dataset->timestamp(i), dataset->timestampText(i));
+    const double total_ms = vitamin_e::elapsedMs(t0);
+    std::vector<std::pair<std::string, double>> stages(r.timing_ms.begin(), r.timing_ms.end());
+    stages.emplace_back("image_load", load_ms);
+    stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
+    progress.update(attempted, stats.tracked_frames);
+  }
+  progress.finish(attempted, stats.tracked_frames);
+  stats.interrupted = g_stop != 0;
+  stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
+  stats.init_retries = slam.initRetries();
+
+  std::string err;
+  const std::vector<pl::MapPoint3> points = slam.mapPoints();
+  stats.map_points = points.size();
+  bool ok = pl::saveTrajectoryTum(slam.trajectory(), traj_path, &err);
+  if (ok) ok = pl::saveMapPly(points, ply_path, &err);
+  stats.peak_rss_mb = io::peakRssMb();
+  if (ok) ok = io::writeRunStats(stats, stats_path, &err);
+  if (!ok) fail(err);
+
+  if (!o.quiet) {
+    if (stats.interrupted) std::fprintf(stderr, "[vitamin_e_run] interrupted: outputs hold the frames so far\n");
+    std::fprintf(stderr, "[vitamin_e_run] %zu frames, %zu tracked (%.1f%%), %zu skipped, %d init retries, %zu map points\n",
+                 stats.frames, stats.tracked_frames, 100.0 * stats.successRate(), stats.skipped_frames,
+                 stats.init_retries, stats.map_points);
+    std::fprintf(stderr, "%s", stats.timing.table().c_str());
+    std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s (peak RSS %.0f MB)\n", traj_path.c_str(),
+                 stats_path.c_str(), ply_path.c_str(), stats.peak_rss_mb);
+  }
+  if (stats.frames == 0 && !stats.interrupted) {
+    fail("no frame of '" + o.dataset + "' could be read (" + std::to_string(stats.skipped_frames) + " skipped)");
+  }
+  if (stats.frames > 0 && stats.tracked_frames == 0) {
+    std::fprintf(stderr, "warning: no frame was tracked: %s is empty\n", traj_path.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options options = parseArgs(argc, argv);
+  try {
+    return run(options);
+  } catch (const io::DatasetError& e) {
+    fail(e.what());
+  } catch (const vitamin_e::camera::CalibrationError& e) {
+    fail(e.what());
+  } catch (const pl::ConfigError& e) {
+    fail(std::string("config: ") + e.what());
+  } catch (const std::exception& e) {
+    fail(e.what());
+  }
+}
