@@ -1,0 +1,189 @@
+// The offline runner (vitamin_e_run, built next to this test) on bad and good
+// input: bad input gives exactly one "error: ..." line and exit code 2.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <yaml-cpp/yaml.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string err;
+};
+
+class RunnerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    runner_ = fs::read_symlink("/proc/self/exe").parent_path() / "vitamin_e_run";
+    if (!fs::exists(runner_)) GTEST_SKIP() << "vitamin_e_run not built (" << runner_ << ")";
+    dir_ = fs::temp_directory_path() / ("ve_runner_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
+
+  Result run(const std::string& args) {
+    const fs::path err = dir_ / "stderr.txt";
+    const std::string cmd = runner_.string() + " " + args + " </dev/null >/dev/null 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    r.err = ss.str();
+    return r;
+  }
+  // Exit code 2 and a single "error: ..." line containing `what`.
+  void expectBadInput(const std::string& args, const std::string& what) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find(what), std::string::npos) << "'" << what << "' not in: " << r.err;
+  }
+
+  static void write(const fs::path& p, const std::string& text) {
+    fs::create_directories(p.parent_path());
+    std::ofstream(p) << text;
+  }
+  // A tiny EuRoC folder of textured images (a slow pan over a noise pattern).
+  fs::path makeEuroc(int n, int w = 160, int h = 120) {
+    const fs::path cam = dir_ / "seq" / "mav0" / "cam0";
+    fs::create_directories(cam / "data");
+    cv::Mat big(h * 2, w * 2, CV_8UC1);
+    cv::randu(big, 0, 255);
+    cv::GaussianBlur(big, big, cv::Size(0, 0), 2.0);
+    cv::normalize(big, big, 0, 255, cv::NORM_MINMAX);
+    std::string csv = "#timestamp [ns],filename\n";
+    for (int i = 0; i < n; ++i) {
+      const std::string ns = std::to_string(1403715273262142976ULL + 50000000ULL * i);
+      csv += ns + "," + ns + ".png\n";
+      cv::imwrite((cam / "data" / (ns + ".png")).string(), big(cv::Rect(i, i / 2, w, h)).clone());
+    }
+    write(cam / "data.csv", csv);
+    write(cam / "sensor.yaml", "%YAML:1.0\nresolution: [" + std::to_string(w) + ", " + std::to_string(h) +
+                                   "]\ncamera_model: pinhole\nintrinsics: [150, 150, " + std::to_string(w / 2) +
+                                   ", " + std::to_string(h / 2) + "]\ndistortion_model: radial-tangential\n"
+                                   "distortion_coefficients: [-0.1, 0.01, 0, 0]\nrate_hz: 20\n");
+    return dir_ / "seq";
+  }
+
+  fs::path runner_;
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(RunnerTest, BadArgumentsExitWithCode2) {
+  expectBadInput("", "--dataset");
+  expectBadInput("--dataset " + dir_.string(), "--out");
+  expectBadInput("--dataset x --out y --bogus 1", "unknown option '--bogus'");
+  expectBadInput("--dataset x --out y --max-frames -3", "--max-frames");
+  expectBadInput("--dataset x --out", "--out needs a value");
+}
+
+TEST_F(RunnerTest, BadDatasetsExitWithCode2) {
+  const std::string out = " --out " + (dir_ / "out").string();
+  expectBadInput("--dataset " + (dir_ / "missing").string() + out, "does not exist");
+  fs::create_directories(dir_ / "empty");
+  expectBadInput("--dataset " + (dir_ / "empty").string() + out, "not a known dataset layout");
+
+  const fs::path top = makeEuroc(4);
+  const fs::path cam = top / "mav0" / "cam0";
+  expectBadInput("--dataset " + top.string() + out + " --start-frame 4", "past the end");
+  expectBadInput("--dataset " + top.string() + out + " --config " + (dir_ / "none.yaml").string(), "none.yaml");
+  write(dir_ / "bad.yaml", "this_key_does_not_exist: 3\n");
+  expectBadInput("--dataset " + top.string() + out + " --config " + (dir_ / "bad.yaml").string(),
+                 "this_key_does_not_exist");
+  expectBadInput("--dataset " + top.string() + out + " --calib " + (dir_ / "nocalib.yaml").string(), "nocalib.yaml");
+
+  const std::string csv_text = [&] {
+    std::ifstream in(cam / "data.csv");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }();
+  write(cam / "data.csv", "#timestamp [ns],filename\n");
+  expectBadInput("--dataset " + top.string() + out, "lists no images");
+  write(cam / "data.csv", "#timestamp [ns],filename\n1403715273262142976;x.png\n");
+  expectBadInput("--dataset " + top.string() + out, "line 2");
+  write(cam / "data.csv", csv_text);
+
+  const fs::path first = cam / "data" / "1403715273262142976.png";
+  const cv::Mat keep = cv::imread(first.string(), cv::IMREAD_UNCHANGED);
+  write(first, "garbage");
+  expectBadInput("--dataset " + top.string() + out, "cannot read image");
+  cv::imwrite(first.string(), cv::Mat(60, 80, CV_8UC1, cv::Scalar(7)));
+  expectBadInput("--dataset " + top.string() + out, "80x60");
+  cv::imwrite(first.string(), keep);
+
+  write(dir_ / "file.txt", "x");
+  expectBadInput("--dataset " + top.string() + " --out " + (dir_ / "file.txt").string(), "output folder");
+}
+
+TEST_F(RunnerTest, RunsASequenceAndSkipsAnUnreadableFrame) {
+  const fs::path top = makeEuroc(12);
+  // Frame 5 unreadable: warned, skipped, the run goes on.
+  write(top / "mav0" / "cam0" / "data" / "1403715273512142976.png", "broken");
+  const fs::path out = dir_ / "out";
+  const Result r = run("--dataset " + top.string() + " --out " + out.string() + " --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1403715273512142976.png"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("error"), std::string::npos) << r.err;
+  ASSERT_TRUE(fs::exists(out / "trajectory.txt"));
+  ASSERT_TRUE(fs::exists(out / "points.ply"));
+  ASSERT_TRUE(fs::exists(out / "stats.json"));
+  const YAML::Node j = YAML::LoadFile((out / "stats.json").string());
+  EXPECT_EQ(j["frames"].as<int>(), 11);
+  EXPECT_EQ(j["skipped_frames"].as<int>(), 1);
+  EXPECT_LE(j["tracked_frames"].as<int>(), 11);
+  EXPECT_EQ(j["timing_ms"]["total"]["count"].as<int>(), 11);
+  EXPECT_GT(j["peak_rss_mb"].as<double>(), 1.0);
+  // Every trajectory line: a dataset timestamp text and 7 finite numbers.
+  std::ifstream traj(out / "trajectory.txt");
+  std::string line;
+  int poses = 0;
+  while (std::getline(traj, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ls(line);
+    std::string stamp;
+    ls >> stamp;
+    EXPECT_EQ(stamp.rfind("1403715273.", 0), 0u) << line;
+    EXPECT_EQ(stamp.size(), 20u) << line;
+    double v;
+    int k = 0;
+    while (ls >> v) ++k;
+    EXPECT_EQ(k, 7) << line;
+    ++poses;
+  }
+  EXPECT_EQ(poses, j["tracked_frames"].as<int>());
+
+  // --start-frame/--max-frames select a range.
+  const Result r2 = run("--dataset " + (top / "mav0").string() + " --out " + out.string() +
+                        " --quiet --start-frame 6 --max-frames 3");
+  ASSERT_EQ(r2.code, 0) << r2.err;
+  EXPECT_EQ(YAML::LoadFile((out / "stats.json").string())["frames"].as<int>(), 3);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
