@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "vitamin_e/geometry/lie.h"
+#include "vitamin_e/geometry/projection.h"
 #include "vitamin_e/geometry/triangulation.h"
 
 namespace vitamin_e {
@@ -52,6 +53,76 @@ double median(std::vector<double> v) {
   return v[m];
 }
 
+// Sampson distance (normalized units) of x1^T E x0 and its squared denominator.
+double sampson(const Eigen::Matrix3d& E, const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, double* denom) {
+  const Eigen::Vector3d Ex0 = E * x0;
+  const Eigen::Vector3d Etx1 = E.transpose() * x1;
+  *denom = std::sqrt(std::max(Ex0.head<2>().squaredNorm() + Etx1.head<2>().squaredNorm(), 1e-30));
+  return x1.dot(Ex0) / *denom;
+}
+
+// Refines (R, t) with |t| = 1 (5 DoF: R <- R expSO3(w), t <- normalize(t + B d)) on the Sampson
+// distance with Geman-McClure IRLS. The denominator is frozen within an iteration, so the
+// Jacobian of the epipolar residual x1^T [t]x R x0 is analytic:
+//   d/dw = -x1^T [t]x R [x0]x,   d/dt = ((R x0) x x1)^T.
+void refineRelativePose(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
+                        const std::vector<bool>& mask, double focal, double sigma_px, int iterations,
+                        Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+  const GemanMcClure kernel(sigma_px);
+  auto cost_of = [&](const Eigen::Matrix3d& Rc, const Eigen::Vector3d& tc) {
+    const Eigen::Matrix3d E = skew(tc) * Rc;
+    double c = 0.0, d;
+    for (size_t i = 0; i < xy0.size(); ++i)
+      if (mask[i]) c += kernel.rho(std::pow(focal * sampson(E, xy0[i].homogeneous(), xy1[i].homogeneous(), &d), 2));
+    return c;
+  };
+  double cost = cost_of(*R, *t);
+  double lambda = 1e-6;
+  for (int it = 0; it < iterations; ++it) {
+    const Eigen::Matrix3d E = skew(*t) * *R;
+    Eigen::Matrix<double, 3, 2> B;
+    B.col(0) = t->unitOrthogonal();
+    B.col(1) = t->cross(B.col(0));
+    Eigen::Matrix<double, 5, 5> H = Eigen::Matrix<double, 5, 5>::Zero();
+    Eigen::Matrix<double, 5, 1> g = Eigen::Matrix<double, 5, 1>::Zero();
+    for (size_t i = 0; i < xy0.size(); ++i) {
+      if (!mask[i]) continue;
+      const Eigen::Vector3d x0 = xy0[i].homogeneous(), x1 = xy1[i].homogeneous();
+      double d;
+      const double r = focal * sampson(E, x0, x1, &d);
+      const double s = focal / d;
+      Eigen::Matrix<double, 1, 5> J;
+      J.leftCols<3>() = -s * x1.transpose() * skew(*t) * *R * skew(x0);
+      J.rightCols<2>() = s * ((*R * x0).cross(x1)).transpose() * B;
+      const double w = kernel.weight(r * r);
+      H.noalias() += w * J.transpose() * J;
+      g.noalias() += w * J.transpose() * r;
+    }
+    bool improved = false;
+    for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
+      Eigen::Matrix<double, 5, 5> Hd = H;
+      Hd.diagonal() *= 1.0 + lambda;
+      const Eigen::Matrix<double, 5, 1> delta = Hd.ldlt().solve(-g);
+      if (!delta.allFinite()) return;
+      const Eigen::Matrix3d R_new = *R * expSO3(delta.head<3>());
+      const Eigen::Vector3d t_new = (*t + B * delta.tail<2>()).normalized();
+      const double c_new = cost_of(R_new, t_new);
+      if (c_new <= cost) {
+        improved = true;
+        const double rel = (cost - c_new) / std::max(cost, 1e-300);
+        *R = R_new;
+        *t = t_new;
+        cost = c_new;
+        lambda = std::max(1e-9, lambda * 0.1);
+        if (rel < 1e-10) return;
+      } else {
+        lambda *= 10.0;
+      }
+    }
+    if (!improved) return;
+  }
+}
+
 }  // namespace
 
 TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
@@ -85,23 +156,35 @@ TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const s
   E = E.rowRange(0, 3).clone();
   cv::Mat Rcv, tcv;
   const int n_good = cv::recoverPose(E, p0, p1, K, Rcv, tcv, mask);
-  std::vector<bool> e_in(n, false);
-  int n_e = 0;
-  for (int i = 0; i < n; ++i) {
-    if (mask.at<uchar>(i)) {
-      e_in[i] = true;
-      ++n_e;
-    }
-  }
-  res.num_essential_inliers = n_e;
-  if (n_good < config.min_points || n_e < config.min_inlier_ratio * n) {
+  if (n_good < config.min_points) {
     res.reason = "too few essential-matrix inliers";
     return res;
   }
+  std::vector<bool> e_in(n, false);
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   cv::cv2eigen(Rcv, R);
   cv::cv2eigen(tcv, t);
+  // The RANSAC model comes from a minimal sample and its inlier set is biased towards it:
+  // alternate re-selecting the correspondences (Sampson distance < 2 thresholds) under the
+  // current model and polishing the model on them.
+  for (int round = 0; round < 3; ++round) {
+    const Eigen::Matrix3d Ecur = skew(t) * R;
+    std::vector<bool> sel(n, false);
+    for (int i = 0; i < n; ++i) {
+      double d;
+      sel[i] = std::abs(sampson(Ecur, xy0[i].homogeneous(), xy1[i].homogeneous(), &d)) * config.focal_px <
+               2.0 * config.ransac_threshold_px;
+    }
+    refineRelativePose(xy0, xy1, sel, config.focal_px, config.ransac_threshold_px, 10, &R, &t);
+    if (round == 2) e_in = sel;
+  }
+  const int n_e = static_cast<int>(std::count(e_in.begin(), e_in.end(), true));
+  res.num_essential_inliers = n_e;
+  if (n_e < config.min_points || n_e < config.min_inlier_ratio * n) {
+    res.reason = "too few essential-matrix inliers";
+    return res;
+  }
 
   // Degeneracy: does a rotation-only model explain the same correspondences?
   {

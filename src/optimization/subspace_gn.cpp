@@ -211,15 +211,13 @@ class SubspaceGn {
           const double sq = r.squaredNorm();
           cost += kernel_.rho(sq);
           const double w = kernel_.weight(sq);
-          const geometry::Matrix23d Jproj = K_.jacobian(p_c);
-          const geometry::Matrix23d Jp = -Jproj * Rt;
+          geometry::Matrix23d Jp;
+          geometry::Matrix26d Jc;
+          geometry::reprojectionJacobians(K_, p_c, R_[o.camera], s >= 0 ? &Jc : nullptr, &Jp);
           const Eigen::Matrix<double, 3, 2> wJpT = w * Jp.transpose();
           H.noalias() += wJpT * Jp;
           g.noalias() += wJpT * r;
           if (s >= 0) {
-            geometry::Matrix26d Jc;
-            Jc.leftCols<3>() = Jproj;
-            Jc.rightCols<3>() = -Jproj * geometry::skew(p_c);
             const Eigen::Matrix<double, 6, 2> wJcT = w * Jc.transpose();
             const int ci = slot_cam_[s];
             Hcc_t[t][ci].noalias() += wJcT * Jc;
@@ -256,7 +254,7 @@ class SubspaceGn {
       cost += kernel_.rho(sq);
       const double w = kernel_.weight(sq);
       geometry::Matrix26d Jc;
-      geometry::reprojectionJacobians(K_, p_c, Rt_[o.camera].transpose(), &Jc, nullptr);
+      geometry::reprojectionJacobians(K_, p_c, R_[o.camera], &Jc, nullptr);
       Hcc_[ci].noalias() += w * Jc.transpose() * Jc;
       gc_[ci].noalias() += w * Jc.transpose() * r;
     }
@@ -350,9 +348,11 @@ class SubspaceGn {
   void cacheCameras() {
     const size_t nc = P_.cameras.size();
     Rt_.resize(nc);
+    R_.resize(nc);
     t_.resize(nc);
     for (size_t c = 0; c < nc; ++c) {
-      Rt_[c] = P_.cameras[c].T_w_c.linear().transpose();
+      R_[c] = P_.cameras[c].T_w_c.linear();
+      Rt_[c] = R_[c].transpose();
       t_[c] = P_.cameras[c].T_w_c.translation();
     }
   }
@@ -405,7 +405,7 @@ class SubspaceGn {
   double fixed_cost_ = 0.0;
   std::vector<Matrix6d> Hcc_, S_;
   std::vector<Vector6d> gc_, b_, dc_;
-  std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, Rt_;
+  std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, Rt_, R_;
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
   std::vector<Matrix63d> Hcp_, Y_;
   std::vector<Eigen::Isometry3d> saved_cams_;

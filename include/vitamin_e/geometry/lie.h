@@ -55,8 +55,9 @@ inline Eigen::Vector3d logSO3(const Eigen::Matrix3d& R) {
     return unskew(R) * (1.0 + theta * theta / 6.0);  // sin(theta) ~ theta
   }
   if (M_PI - theta < 1e-4) {
-    // Near pi: R ~ 2 a a^T - I; take the column of R + I with the largest norm.
-    Eigen::Matrix3d B = 0.5 * (R + Eigen::Matrix3d::Identity());
+    // Near pi: the symmetric part of (R + I) / 2 is ~ a a^T (its antisymmetric part is
+    // O(pi - theta) and would bias the axis); take its column of largest norm.
+    const Eigen::Matrix3d B = 0.25 * (R + R.transpose()) + 0.5 * Eigen::Matrix3d::Identity();
     int k = 0;
     B.diagonal().maxCoeff(&k);
     Eigen::Vector3d axis = B.col(k) / std::sqrt(std::max(B(k, k), 1e-300));
