@@ -52,26 +52,33 @@ cv::Mat Renderer::renderFloat(const Eigen::Isometry3d& T_w_c, cv::Mat* depth) co
   const Eigen::Matrix3d R = T_w_c.linear();
   const Eigen::Vector3d o = T_w_c.translation();
   RayHit hit;
-  for (int v = 0; v < h; ++v) {
-    float* row = img.ptr<float>(v);
-    float* drow = depth ? depth->ptr<float>(v) : nullptr;
-    for (int u = 0; u < w; ++u) {
-      const std::size_t pix = static_cast<std::size_t>(v) * w + u;
-      const double ang = pixel_angle_[pix];
-      float sum = 0.0f, zsum = 0.0f;
-      int hits = 0;
-      for (int k = 0; k < n; ++k) {
-        const Eigen::Vector3f& rc = rays_c_[pix * n + k];
-        const Eigen::Vector3d d = R * rc.cast<double>();
-        if (scene_.intersect(o, d, &hit)) {
-          const double footprint = hit.t * ang / std::sqrt(std::max(hit.cos_incidence, 0.05));
-          sum += scene_.shade(hit, footprint);
-          zsum += static_cast<float>(hit.t * rc.z());
-          ++hits;
+  // 16 x 16 tiles: neighbouring pixels read neighbouring texels, so tiles keep
+  // the texture reads in cache (rows sweep whole walls).
+  constexpr int kTile = 16;
+  for (int tv = 0; tv < h; tv += kTile) {
+    for (int tu = 0; tu < w; tu += kTile) {
+      for (int v = tv; v < std::min(h, tv + kTile); ++v) {
+        float* row = img.ptr<float>(v);
+        float* drow = depth ? depth->ptr<float>(v) : nullptr;
+        for (int u = tu; u < std::min(w, tu + kTile); ++u) {
+          const std::size_t pix = static_cast<std::size_t>(v) * w + u;
+          const double ang = pixel_angle_[pix];
+          float sum = 0.0f, zsum = 0.0f;
+          int hits = 0;
+          for (int k = 0; k < n; ++k) {
+            const Eigen::Vector3f& rc = rays_c_[pix * n + k];
+            const Eigen::Vector3d d = R * rc.cast<double>();
+            if (scene_.intersect(o, d, &hit)) {
+              const double footprint = hit.t * ang / std::sqrt(std::max(hit.cos_incidence, 0.05));
+              sum += scene_.shade(hit, footprint);
+              zsum += static_cast<float>(hit.t * rc.z());
+              ++hits;
+            }
+          }
+          row[u] = sum / static_cast<float>(n);
+          if (drow) drow[u] = hits ? zsum / static_cast<float>(hits) : 0.0f;
         }
       }
-      row[u] = sum / static_cast<float>(n);
-      if (drow) drow[u] = hits ? zsum / static_cast<float>(hits) : 0.0f;
     }
   }
   return img;

@@ -2,7 +2,7 @@
 // Procedural surface textures for the synthetic sequences: deterministic from a
 // seed, rich detail at several scales (value-noise octaves at non-harmonic
 // wavelengths, hard-edged discs/rectangles/strokes at 1-40 cm), never periodic.
-// Each texture keeps a mip pyramid for anti-aliased (trilinear) sampling.
+// Each texture keeps a mip pyramid (16-bit) for anti-aliased (trilinear) sampling.
 #include <cstdint>
 #include <vector>
 
@@ -41,6 +41,7 @@ class Texture {
   int height() const { return levels_.empty() ? 0 : levels_[0].rows; }
   double texelSize() const { return texel_m_; }
   int numLevels() const { return static_cast<int>(levels_.size()); }
+  // Mip level l (CV_16UC1, value * 65535); level 0 is the input.
   const cv::Mat& level(int l) const { return levels_[l]; }
 
   // Bilinear at level 0; (u, v) in metres from the texture origin (clamped at the border).
