@@ -120,7 +120,7 @@ pl::SystemConfig loadConfig(const std::string& path) {
     return config;
   }
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw pl::ConfigError("config file '" + path + "' does not exist");
+  if (!fs::is_regular_file(path, ec)) throw pl::ConfigError("file '" + path + "' does not exist");
   return pl::loadSystemConfig(path);
 }
 
