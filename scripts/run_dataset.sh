@@ -55,5 +55,7 @@ if [ "${VE_NO_BUILD:-0}" != 1 ] || [ ! -x "$bin" ]; then
 fi
 [ -x "$bin" ] || ve_die "vitamin_e_run was not built ($bin missing)"
 
-[ -n "$kind" ] && ve_info "$kind dataset '$dataset' -> '$out' ${config_args[*]:-}"
+if [ -n "$kind" ]; then
+  ve_info "$kind dataset '$dataset' -> '$out'${config_args[*]:+ (${config_args[*]})}"
+fi
 exec "$bin" --dataset "$dataset" --out "$out" "${config_args[@]}" "$@"
