@@ -234,6 +234,7 @@ int main(int argc, char** argv) {
     else if (k == "--refine") cfg.refine_flow = std::stoi(argv[i + 1]);
     else if (k == "--parallax") cfg.predict_parallax = std::stoi(argv[i + 1]);
     else if (k == "--ksigma") cfg.kappa_smoothing_sigma = std::stod(argv[i + 1]);
+    else if (k == "--polish") cfg.polish_steps = std::stoi(argv[i + 1]);
     else if (k == "--nms") cfg.nms_radius_px = std::stoi(argv[i + 1]);
     else if (k == "--track-sigma") cfg.track_sigma_px = std::stod(argv[i + 1]);
     else if (k == "--min-track-curvature") cfg.min_track_curvature = std::stod(argv[i + 1]);

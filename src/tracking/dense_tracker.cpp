@@ -121,6 +121,11 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       const Eigen::Vector2f r = cfg.predict_parallax ? t.resid : Eigen::Vector2f::Zero();
       const Eigen::Vector2f pred = Af * t.uv + bf + r;
       if (!hillClimb(kappa, pred, fwd, &s.px)) continue;
+      if (cfg.polish_steps > 0) {
+        // The prior biases the maximum of F; the extremum is the maximum of kappa.
+        const ClimbParams pol{t.sign, 0.f, 1.f, cfg.polish_steps, 2};
+        if (!hillClimb(kappa, s.px.cast<float>(), pol, &s.px)) continue;
+      }
       s.kappa = kappa.ptr<float>(s.px.y())[s.px.x()];
       if (t.sign * s.kappa < min_k) continue;
       const float strength = t.sign * s.kappa * inv_scale;
@@ -130,6 +135,10 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
       Eigen::Vector2i q;
       if (!hillClimb(prev_kappa, Ainv * (s.uv - bf - r), bwd, &q)) continue;
+      if (cfg.polish_steps > 0) {
+        const ClimbParams pol{t.sign, 0.f, 1.f, cfg.polish_steps, 2};
+        if (!hillClimb(prev_kappa, q.cast<float>(), pol, &q)) continue;
+      }
       const Eigen::Vector2f qs = refineSubpixel(prev_kappa, q, t.sign);
       s.ok = (qs - t.uv).squaredNorm() <= fb2;
     }

@@ -41,6 +41,7 @@ void TrackerConfig::validate() const {
   require(std::isfinite(lambda) && lambda >= 0.0, "lambda", "must be finite and >= 0");
   require(std::isfinite(track_sigma_px) && track_sigma_px > 0.0, "track_sigma_px", "must be > 0");
   require(max_climb_steps >= 1, "max_climb_steps", "must be >= 1");
+  require(polish_steps >= 0, "polish_steps", "must be >= 0");
   require(std::isfinite(fb_threshold_px) && fb_threshold_px > 0.0, "fb_threshold_px", "must be > 0");
   require(std::isfinite(min_track_curvature) && min_track_curvature >= 0.0, "min_track_curvature",
           "must be finite and >= 0");

@@ -1,0 +1,272 @@
+// Unit tests of the dense curvature-extrema tracker on synthetic images made here.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vitamin_e/tracking/affine_flow.h"
+#include "vitamin_e/tracking/brief.h"
+#include "vitamin_e/tracking/curvature.h"
+#include "vitamin_e/tracking/dense_tracker.h"
+
+namespace vt = vitamin_e::tracking;
+
+namespace {
+
+struct Blob {
+  double x, y, s, a;
+};
+
+// Analytic texture: sum of Gaussian blobs on a grey background, evaluated at
+// the warped position W^-1(u, v) so that warps are exact.
+std::vector<Blob> randomBlobs(int n, int w, int h, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> ux(-20, w + 20), uy(-20, h + 20), us(1.8, 4.0), ua(-70, 70);
+  std::vector<Blob> b(n);
+  for (auto& bl : b) bl = {ux(rng), uy(rng), us(rng), ua(rng)};
+  return b;
+}
+
+cv::Mat renderBlobs(const std::vector<Blob>& blobs, int w, int h, const Eigen::Matrix2d& A,
+                    const Eigen::Vector2d& t) {
+  // Image(u) = texture(A^-1 (u - t)).
+  const Eigen::Matrix2d Ai = A.inverse();
+  cv::Mat img(h, w, CV_8UC1);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const Eigen::Vector2d p = Ai * (Eigen::Vector2d(u, v) - t);
+      double val = 128.0;
+      for (const Blob& b : blobs) {
+        const double dx = p.x() - b.x, dy = p.y() - b.y;
+        const double d2 = dx * dx + dy * dy;
+        if (d2 < 25.0 * b.s * b.s) val += b.a * std::exp(-d2 / (2 * b.s * b.s));
+      }
+      img.at<std::uint8_t>(v, u) = cv::saturate_cast<std::uint8_t>(val);
+    }
+  }
+  return img;
+}
+
+Eigen::Matrix2d rotation(double deg) {
+  const double a = deg * M_PI / 180.0;
+  Eigen::Matrix2d R;
+  R << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+  return R;
+}
+
+}  // namespace
+
+// kappa = f'(r)^3 / r for a radial profile: for a bright Gaussian blob it is
+// zero at the centre and most negative on the ring r = s*sqrt(2/3) (s includes
+// the pre-smoothing). The extrema must lie on that ring, centred on the blob.
+TEST(Curvature, GaussianBlobExtremaCentredOnBlob) {
+  const int w = 64, h = 64;
+  const double cx = 31.6, cy = 32.3, s = 4.0;
+  cv::Mat img(h, w, CV_32FC1);
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+      img.at<float>(v, u) = static_cast<float>(
+          20.0 + 200.0 * std::exp(-((u - cx) * (u - cx) + (v - cy) * (v - cy)) / (2 * s * s)));
+  cv::Mat kappa;
+  vt::computeCurvature(img, 1.0, &kappa);
+  std::vector<vt::Extremum> ex;
+  vt::detectExtrema(kappa, 2, 1e-3f * static_cast<float>(cv::norm(kappa, cv::NORM_INF)), 3, &ex);
+  ASSERT_GE(ex.size(), 3u);
+  const double ring = std::sqrt(s * s + 1.0) * std::sqrt(2.0 / 3.0);
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  int n = 0;
+  float kmin = 0.f;
+  for (const auto& e : ex) {
+    if (e.kappa >= 0.f) continue;  // a bright blob: minima of kappa (maxima of -kappa)
+    const Eigen::Vector2f p = vt::refineSubpixel(kappa, {e.x, e.y}, -1.f);
+    const double r = std::hypot(p.x() - cx, p.y() - cy);
+    EXPECT_NEAR(r, ring, 0.6) << "extremum at " << p.transpose();
+    mean += p.cast<double>();
+    ++n;
+    kmin = std::min(kmin, e.kappa);
+  }
+  ASSERT_GE(n, 3);
+  mean /= n;
+  EXPECT_LT((mean - Eigen::Vector2d(cx, cy)).norm(), 0.5);
+  // The centre itself is a (near) zero of kappa.
+  const float kc = vt::sampleBilinear(kappa, static_cast<float>(cx), static_cast<float>(cy));
+  EXPECT_LT(std::fabs(kc), 0.25f * std::fabs(kmin));
+}
+
+TEST(AffineFlow, RecoversKnownAffineWithHalfOutliers) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> ux(0, 752), uy(0, 480);
+  std::normal_distribution<double> noise(0.0, 0.4);
+  Eigen::Matrix2d A;
+  A << 1.02, -0.03, 0.04, 0.985;
+  const Eigen::Vector2d b(12.0, -7.5);
+  std::vector<Eigen::Vector2d> x, y;
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector2d p(ux(rng), uy(rng));
+    x.push_back(p);
+    if (i % 2 == 0) {
+      y.push_back(A * p + b + Eigen::Vector2d(noise(rng), noise(rng)));
+    } else {
+      y.emplace_back(ux(rng), uy(rng));  // outlier anywhere in the image
+    }
+  }
+  vt::AffineFitConfig cfg;
+  const vt::AffineFit fit = vt::fitAffineGemanMcClure(x, y, cfg);
+  ASSERT_TRUE(fit.ok);
+  EXPECT_LT((fit.A - A).cwiseAbs().maxCoeff(), 0.004);
+  EXPECT_LT((fit.b - b).norm(), 1.0);
+  EXPECT_GE(fit.inliers, 95);
+  EXPECT_LE(fit.inliers, 110);
+  // Plain least squares would be far off: make sure the data really is hard.
+  Eigen::MatrixXd H(x.size(), 3), Y(x.size(), 2);
+  for (size_t i = 0; i < x.size(); ++i) {
+    H.row(i) << x[i].x(), x[i].y(), 1.0;
+    Y.row(i) = y[i].transpose();
+  }
+  const Eigen::MatrixXd P = H.colPivHouseholderQr().solve(Y);
+  EXPECT_GT((P.row(2).transpose() - b).norm(), 5.0);
+}
+
+TEST(HillClimb, FollowsTranslatedRotatedPattern) {
+  const int w = 200, h = 160;
+  const auto blobs = randomBlobs(260, w, h, 3);
+  const Eigen::Matrix2d R = rotation(1.5);
+  const Eigen::Vector2d c(100, 80), t(2.6, -1.7);
+  const Eigen::Vector2d tt = c + t - R * c;  // y = R (x - c) + c + t
+  const cv::Mat img0 = renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero());
+  const cv::Mat img1 = renderBlobs(blobs, w, h, R, tt);
+  const vt::TrackerConfig cfg;  // the tracker's defaults
+  cv::Mat k0, k1;
+  vt::computeCurvature(img0, cfg.smoothing_sigma, &k0);
+  vt::computeCurvature(img1, cfg.smoothing_sigma, &k1);
+  const float scale = vt::robustCurvatureScale(k0);
+  std::vector<vt::Extremum> ex;
+  vt::detectExtrema(k0, 2, 3.f * scale, 12, &ex);
+  ASSERT_GT(ex.size(), 50u);
+  std::vector<double> err;
+  for (const auto& e : ex) {
+    const float sgn = e.kappa > 0 ? 1.f : -1.f;
+    const Eigen::Vector2f p0 = vt::refineSubpixel(k0, {e.x, e.y}, sgn);
+    const Eigen::Vector2d truth = R * p0.cast<double>() + tt;
+    // Prediction off by up to a pixel (a coarse dominant flow).
+    const Eigen::Vector2f pred = (truth + Eigen::Vector2d(0.7, -0.6)).cast<float>();
+    vt::ClimbParams cp{sgn, static_cast<float>(cfg.lambda) * scale,
+                       static_cast<float>(cfg.track_sigma_px * cfg.track_sigma_px), cfg.max_climb_steps, 2};
+    Eigen::Vector2i q;
+    if (!vt::hillClimb(k1, pred, cp, &q)) continue;
+    // Polish on kappa alone (TrackerConfig::polish_steps): with a prediction
+    // deliberately off by ~1 px the prior biases F's maximum.
+    const vt::ClimbParams pol{sgn, 0.f, 1.f, 2, 2};
+    if (!vt::hillClimb(k1, q.cast<float>(), pol, &q)) continue;
+    err.push_back((vt::refineSubpixel(k1, q, sgn).cast<double>() - truth).norm());
+  }
+  ASSERT_GT(err.size(), 0.9 * ex.size());
+  std::sort(err.begin(), err.end());
+  EXPECT_LT(err[err.size() / 2], 0.2) << "median error";
+  EXPECT_LT(err[err.size() * 8 / 10], 0.35) << "80th percentile";
+}
+
+TEST(DenseTracker, TracksWarpedPatternEndToEnd) {
+  const int w = 320, h = 240;
+  const auto blobs = randomBlobs(700, w, h, 11);
+  const Eigen::Matrix2d R = rotation(1.0);
+  const Eigen::Vector2d c(160, 120), t(-4.3, 3.2);
+  const Eigen::Vector2d tt = c + t - R * c;
+  vt::TrackerConfig cfg;
+  cfg.brief_scale = 1.0 / 3.0;  // small synthetic image
+  cfg.brief_patch_size = 11;
+  vt::DenseTracker tracker(cfg);
+  const auto f0 = tracker.track(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 0.0);
+  ASSERT_GT(f0.points.size(), 200u);
+  EXPECT_EQ(f0.num_new, static_cast<int>(f0.points.size()));
+  const auto f1 = tracker.track(renderBlobs(blobs, w, h, R, tt), 0.05);
+  EXPECT_TRUE(f1.flow_ok);
+  EXPECT_LT((f1.b - tt).norm(), 3.0);
+  std::map<std::uint64_t, Eigen::Vector2f> before;
+  for (const auto& p : f0.points) before[p.id] = p.uv;
+  std::vector<double> err;
+  for (const auto& p : f1.points) {
+    if (p.age == 0) continue;
+    EXPECT_EQ(p.age, 1);
+    ASSERT_TRUE(before.count(p.id));
+    err.push_back((p.uv.cast<double>() - (R * before[p.id].cast<double>() + tt)).norm());
+  }
+  ASSERT_GT(err.size(), 0.7 * f0.points.size());
+  EXPECT_EQ(f1.num_tracked, static_cast<int>(err.size()));
+  std::sort(err.begin(), err.end());
+  EXPECT_LT(err[err.size() / 2], 0.2);
+  EXPECT_GT(std::count_if(err.begin(), err.end(), [](double e) { return e < 1.0; }), 0.95 * err.size());
+  // Dropped tracks disappear.
+  std::vector<std::uint64_t> drop{f1.points[0].id, f1.points[1].id};
+  tracker.dropTracks(drop);
+  const auto f2 = tracker.track(renderBlobs(blobs, w, h, R, tt), 0.1);
+  for (const auto& p : f2.points) EXPECT_TRUE(p.id != drop[0] && p.id != drop[1]);
+}
+
+TEST(Brief, DistanceUnchangedByBrightnessOffset) {
+  const int w = 120, h = 100;
+  const auto blobs = randomBlobs(400, w, h, 5);
+  const cv::Mat img = renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero());
+  cv::Mat brighter;
+  img.convertTo(brighter, CV_32F, 1.0, 25.0);
+  cv::Mat base;
+  img.convertTo(base, CV_32F);
+  vt::BriefExtractor brief(15);
+  int compared = 0;
+  for (int y = 20; y < 80; y += 13) {
+    for (int x = 20; x < 100; x += 11) {
+      vt::BriefDescriptor a, b, other;
+      ASSERT_TRUE(brief.describe(base, x, y, &a));
+      ASSERT_TRUE(brief.describe(brighter, x, y, &b));
+      EXPECT_EQ(vt::hammingDistance(a, b), 0);
+      ASSERT_TRUE(brief.describe(base, x + 9, y + 4, &other));
+      EXPECT_GT(vt::hammingDistance(a, other), 40);  // a different patch is far
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 20);
+  // Out of the image: no descriptor.
+  vt::BriefDescriptor d;
+  EXPECT_FALSE(brief.describe(base, 3, 50, &d));
+}
+
+TEST(DenseTracker, BlackAndConstantImagesGiveNoFeatures) {
+  vt::DenseTracker tracker;
+  for (int v : {0, 0, 128, 255, 0}) {
+    const cv::Mat img(480, 752, CV_8UC1, cv::Scalar(v));
+    vt::TrackerFrame f;
+    ASSERT_NO_THROW(f = tracker.track(img, 1.0));
+    EXPECT_TRUE(f.points.empty());
+    EXPECT_EQ(f.num_new, 0);
+    EXPECT_FALSE(f.flow_ok);
+  }
+  EXPECT_THROW(tracker.track(cv::Mat(), 0.0), std::invalid_argument);
+  EXPECT_THROW(tracker.track(cv::Mat(480, 752, CV_8UC3, cv::Scalar(1, 2, 3)), 0.0), std::invalid_argument);
+  EXPECT_THROW(tracker.track(cv::Mat(480, 752, CV_32FC1, cv::Scalar(1)), 0.0), std::invalid_argument);
+}
+
+TEST(TrackerConfig, ValidateNamesTheField) {
+  vt::TrackerConfig c;
+  EXPECT_NO_THROW(c.validate());
+  c.brief_scale = 0.0;
+  try {
+    c.validate();
+    FAIL() << "expected invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("brief_scale"), std::string::npos);
+  }
+  c = vt::TrackerConfig{};
+  c.threads = 0;
+  EXPECT_THROW(vt::DenseTracker{c}, std::invalid_argument);
+}
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
