@@ -114,9 +114,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
   }
 }
 
-TriangleMesh TsdfVolume::extractMesh() {
-  const int n = impl_->config.block_voxels;
-  (void)n;
+std::size_t TsdfVolume::updateMesh() {
   // Re-mesh dirty blocks and the lower neighbours whose cubes read their voxels.
   std::vector<std::uint64_t> todo;
   for (const auto& [key, block] : impl_->blocks) {
@@ -134,6 +132,11 @@ TriangleMesh TsdfVolume::extractMesh() {
     ++impl_->last_remeshed;
   }
   for (auto& [key, block] : impl_->blocks) block->dirty = false;
+  return impl_->last_remeshed;
+}
+
+TriangleMesh TsdfVolume::extractMesh() {
+  updateMesh();
 
   // Assemble: share vertices by edge key, area-weighted vertex normals.
   TriangleMesh mesh;

@@ -9,6 +9,7 @@
 namespace vitamin_e::fusion {
 
 namespace {
+double sq(double x) { return x * x; }
 void require(bool ok, const char* key, const std::string& what) {
   if (!ok) throw std::invalid_argument(std::string("tsdf.") + key + ": " + what);
 }
@@ -73,6 +74,7 @@ void TsdfConfig::validate() const {
   require(min_depth > 0.0, "min_depth", "must be > 0");
   require(max_depth > min_depth, "max_depth", "must be > min_depth");
   require(min_extract_weight > 0.0, "min_extract_weight", "must be > 0");
+  require(weight_depth_ref >= 0.0, "weight_depth_ref", "must be >= 0");
   require(raster_downscale >= 1 && raster_downscale <= 16, "raster_downscale", "must be in [1, 16]");
 }
 
@@ -178,8 +180,11 @@ IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth, con
           if (sdf < -trunc) continue;
           const float f = static_cast<float>(std::min(sdf, trunc));
           const float w = vox->weight;
-          vox->sdf = (vox->sdf * w + f) / (w + 1.0f);
-          vox->weight = std::min(w + 1.0f, max_w);
+          const float m = cfg.weight_depth_ref > 0.0
+                              ? static_cast<float>(std::min(1.0, sq(cfg.weight_depth_ref / zm)))
+                              : 1.0f;
+          vox->sdf = (vox->sdf * w + m * f) / (w + m);
+          vox->weight = std::min(w + m, max_w);
           ++updated;
         }
       }

@@ -98,6 +98,11 @@ void FrameMesher::prune(FrameMesh* mesh, const PinholeIntrinsics& K) const {
     const double lo = std::min({a.inv_depth, b.inv_depth, c.inv_depth});
     const double hi = std::max({a.inv_depth, b.inv_depth, c.inv_depth});
     if (!(lo > 0.0) || (hi - lo) > config_.max_inv_depth_jump * hi) continue;
+    if (config_.jump_on_measured) {
+      const double mlo = std::min({a.measured_inv_depth, b.measured_inv_depth, c.measured_inv_depth});
+      const double mhi = std::max({a.measured_inv_depth, b.measured_inv_depth, c.measured_inv_depth});
+      if ((mhi - mlo) > config_.max_inv_depth_jump * mhi) continue;
+    }
     const Eigen::Vector3d pa = K.backProject(a.uv, 1.0 / a.inv_depth);
     const Eigen::Vector3d pb = K.backProject(b.uv, 1.0 / b.inv_depth);
     const Eigen::Vector3d pc = K.backProject(c.uv, 1.0 / c.inv_depth);

@@ -1,6 +1,7 @@
 // NLTGV2-L1 on the mesh graph, diagonally preconditioned primal-dual.
 #include "vitamin_e/meshing/nltgv_denoiser.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -26,6 +27,8 @@ void NltgvConfig::validate() const {
   require(iterations >= 0, "iterations", "must be >= 0");
   require(warm_iterations >= 0, "warm_iterations", "must be >= 0");
   require(theta >= 0.0 && theta <= 1.0, "theta", "must be in [0, 1]");
+  require(support_sigma >= 0.0, "support_sigma", "must be >= 0");
+  require(min_support > 0.0 && min_support <= 1.0, "min_support", "must be in (0, 1]");
 }
 
 NltgvDenoiser::NltgvDenoiser(const NltgvConfig& config) : config_(config) { config_.validate(); }
@@ -40,10 +43,11 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
   auto& V = mesh->vertices;
   const int n = static_cast<int>(V.size());
   const auto undirected = mesh->edges();
-  const int m = static_cast<int>(undirected.size()) * 2;  // directed edges
+  const int m = static_cast<int>(undirected.size());
   stats.edges = undirected.size();
   if (n == 0) return stats;
   const double a = config_.alpha, b = config_.beta, lam = config_.lambda;
+  (void)a;
 
   // Primal: xi, wx, wy; their over-relaxed copies; measured z; steps.
   std::vector<double> z(n), xi(n), wx(n, 0.0), wy(n, 0.0), nx(n), ny(n);
@@ -62,24 +66,71 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
       }
     }
   }
+  // Adjacency (undirected) for the median filter and the gradient initialisation.
+  std::vector<int> deg(n + 1, 0), adj(2 * undirected.size());
+  for (const auto& e : undirected) ++deg[e.first + 1], ++deg[e.second + 1];
+  for (int i = 0; i < n; ++i) deg[i + 1] += deg[i];
+  {
+    std::vector<int> fill(deg.begin(), deg.end() - 1);
+    for (const auto& e : undirected) adj[fill[e.first]++] = e.second, adj[fill[e.second]++] = e.first;
+  }
+  std::vector<double> zmed(n), ring;
+  for (int i = 0; i < n; ++i) {
+    ring.assign(1, z[i]);
+    for (int k = deg[i]; k < deg[i + 1]; ++k) ring.push_back(z[adj[k]]);
+    std::nth_element(ring.begin(), ring.begin() + ring.size() / 2, ring.end());
+    zmed[i] = ring[ring.size() / 2];
+  }
+  // 1-ring least-squares gradient of the median-filtered data (per normalized coordinate).
+  std::vector<double> gx(n, 0.0), gy(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+    for (int k = deg[i]; k < deg[i + 1]; ++k) {
+      const int j = adj[k];
+      const Eigen::Vector2d d(nx[j] - nx[i], ny[j] - ny[i]);
+      A += d * d.transpose();
+      rhs += d * (zmed[j] - zmed[i]);
+    }
+    if (deg[i + 1] - deg[i] >= 2 && A.determinant() > 1e-16) {
+      const Eigen::Vector2d g = A.ldlt().solve(rhs);
+      gx[i] = g.x();
+      gy[i] = g.y();
+    }
+  }
+  // Support weight: how badly each end's local plane predicts the other end.
+  auto support = [&](int i, int j) {
+    if (config_.support_sigma <= 0.0) return a;
+    const double dxn = nx[j] - nx[i], dyn = ny[j] - ny[i];
+    const double ri = std::abs(zmed[j] - zmed[i] - gx[i] * dxn - gy[i] * dyn);
+    const double rj = std::abs(zmed[i] - zmed[j] + gx[j] * dxn + gy[j] * dyn);
+    const double r = 0.5 * (ri + rj) / (std::max(zmed[i], zmed[j]) * config_.support_sigma);
+    return a * std::max(config_.min_support, std::exp(-r * r));
+  };
+  for (int i = 0; i < n; ++i)
+    if (wx[i] == 0.0 && wy[i] == 0.0) wx[i] = gx[i], wy[i] = gy[i];  // cold start
   std::vector<int> ei(m), ej(m);
+  std::vector<double> ae(m);
   std::vector<double> dx(m), dy(m), p0(m, 0.0), p1(m, 0.0), p2(m, 0.0), s0(m);
   std::vector<double> tau_xi(n, 0.0), tau_wx(n, 0.0), tau_wy(n, 0.0);
   for (int k = 0; k < m; ++k) {
-    const auto& ue = undirected[k / 2];
-    const int i = (k & 1) ? ue.second : ue.first;
-    const int j = (k & 1) ? ue.first : ue.second;
+    // Orient every edge by track id so that warm-started duals keep their sign.
+    const auto& ue = undirected[k];
+    const bool flip = V[ue.first].id > V[ue.second].id;
+    const int i = flip ? ue.second : ue.first;
+    const int j = flip ? ue.first : ue.second;
     ei[k] = i;
     ej[k] = j;
     dx[k] = nx[i] - nx[j];
     dy[k] = ny[i] - ny[j];
-    s0[k] = 1.0 / (a * (2.0 + std::abs(dx[k]) + std::abs(dy[k])));
-    tau_xi[i] += a;
-    tau_xi[j] += a;
-    tau_wx[i] += a * std::abs(dx[k]) + b;
-    tau_wy[i] += a * std::abs(dy[k]) + b;
-    tau_wx[j] += b;
-    tau_wy[j] += b;
+    ae[k] = support(i, j);
+    s0[k] = 1.0 / (ae[k] * (2.0 + std::abs(dx[k]) + std::abs(dy[k])));
+    tau_xi[i] += ae[k];
+    tau_xi[j] += ae[k];
+    tau_wx[i] += 0.5 * ae[k] * std::abs(dx[k]) + b;
+    tau_wy[i] += 0.5 * ae[k] * std::abs(dy[k]) + b;
+    tau_wx[j] += 0.5 * ae[k] * std::abs(dx[k]) + b;
+    tau_wy[j] += 0.5 * ae[k] * std::abs(dy[k]) + b;
     if (config_.warm_start && !prev_duals_.empty()) {
       const auto it = prev_duals_.find(edgeKey(V[i].id, V[j].id));
       if (it != prev_duals_.end()) {
@@ -107,7 +158,8 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
     std::fill(gwy.begin(), gwy.end(), 0.0);
     for (int k = 0; k < m; ++k) {
       const int i = ei[k], j = ej[k];
-      const double r0 = a * (bxi[i] - bxi[j] - bwx[i] * dx[k] - bwy[i] * dy[k]);
+      const double a = ae[k];
+      const double r0 = a * (bxi[i] - bxi[j] - 0.5 * ((bwx[i] + bwx[j]) * dx[k] + (bwy[i] + bwy[j]) * dy[k]));
       const double q0 = clamp1(p0[k] + s0[k] * r0);
       const double q1 = clamp1(p1[k] + s12 * b * (bwx[i] - bwx[j]));
       const double q2 = clamp1(p2[k] + s12 * b * (bwy[i] - bwy[j]));
@@ -116,10 +168,11 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
       p2[k] = q2;
       gxi[i] += a * q0;
       gxi[j] -= a * q0;
-      gwx[i] += -a * q0 * dx[k] + b * q1;
-      gwy[i] += -a * q0 * dy[k] + b * q2;
-      gwx[j] -= b * q1;
-      gwy[j] -= b * q2;
+      const double hx = 0.5 * a * q0 * dx[k], hy = 0.5 * a * q0 * dy[k];
+      gwx[i] += b * q1 - hx;
+      gwy[i] += b * q2 - hy;
+      gwx[j] -= b * q1 + hx;
+      gwy[j] -= b * q2 + hy;
     }
     // Primal descent, prox of the L1 data term, over-relaxation.
     for (int i = 0; i < n; ++i) {

@@ -31,6 +31,9 @@ struct TsdfConfig {
   double min_depth = 0.1;      // rasterised depths outside [min_depth, max_depth] are ignored
   double max_depth = 20.0;
   double min_extract_weight = 0.5;  // voxels lighter than this count as unobserved
+  // Measurement weight min(1, (weight_depth_ref / z)^2) (depth noise grows with
+  // z^2 for triangulated points); 0: every measurement weighs 1.
+  double weight_depth_ref = 0.0;
   int raster_downscale = 1;    // depth map at (width, height) / raster_downscale
   void validate() const;       // throws std::invalid_argument naming the key
 };
@@ -66,9 +69,13 @@ class TsdfVolume {
   // Rasterises a mesh into a depth map (row-major, 0 where empty) of K's size.
   static std::vector<float> rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeIntrinsics& K);
 
-  // The zero level set as a mesh; only blocks changed since the last call are re-meshed.
+  // Re-runs marching tetrahedra on the blocks changed since the last update
+  // (the incremental part); returns the number of blocks re-meshed.
+  std::size_t updateMesh();
+  // updateMesh(), then assembles the cached per-block triangles into one
+  // indexed mesh (vertices shared across blocks, area-weighted normals).
   TriangleMesh extractMesh();
-  // Number of blocks re-meshed by the last extractMesh().
+  // Number of blocks re-meshed by the last updateMesh() / extractMesh().
   std::size_t lastRemeshedBlocks() const;
 
   // Voxel at a world point (nullptr if its block is not allocated).

@@ -17,6 +17,9 @@ struct FrameMesherConfig {
   double min_depth = 0.05;             // points closer (or behind) are ignored
   double max_depth = 50.0;             // points farther are ignored
   bool drop_unused_vertices = true;    // remove vertices that end up in no triangle
+  // prune() also applies the jump test to the measured inverse depths (so that
+  // smoothing cannot turn a real discontinuity into a kept "curtain").
+  bool jump_on_measured = true;
   void validate() const;               // throws std::invalid_argument naming the key
 };
 

@@ -2,10 +2,15 @@
 // NLTGV2-L1 denoising of a FrameMesh's inverse depths (after Greene & Roy,
 // FLaME, ICCV 2017; non-local TGV of Ranftl et al.): every vertex i carries its
 // inverse depth xi_i and a 2D gradient w_i (per normalized image coordinate);
-// every directed mesh edge (i, j) penalises
-//   alpha * |xi_i - xi_j - w_i . (x_i - x_j)| + beta * |w_i - w_j|_1
+// every mesh edge (i, j) penalises (symmetric form: the mean gradient of its ends)
+//   alpha_ij * |xi_i - xi_j - (w_i + w_j)/2 . (x_i - x_j)| + beta * |w_i - w_j|_1
 // (x = normalized coordinates), and every vertex lambda * |xi_i - z_i| (z: the
-// measured inverse depth). Piecewise-planar surfaces are flattened (affine
+// measured inverse depth). As in NLTGV (Ranftl et al. 2014) the edge terms carry
+// support weights: alpha_ij = alpha * max(min_support, exp(-(r_ij / support_sigma)^2))
+// with r_ij the relative jump of the 1-ring median-filtered measured inverse
+// depths, so that object boundaries are cut while single outliers (removed by
+// the median) stay connected and are repaired. Gradients start from a weighted
+// least-squares plane fit over each vertex's 1-ring. Piecewise-planar surfaces are flattened (affine
 // inverse depth = plane) while steps are kept. Solved with the diagonally
 // preconditioned primal-dual algorithm of Pock & Chambolle (2011).
 // Warm start: the previous call's solution is kept by track id (the relative
@@ -25,6 +30,8 @@ struct NltgvConfig {
   int iterations = 200;       // primal-dual iterations (cold start)
   int warm_iterations = 80;   // iterations when most vertices were warm-started
   double theta = 1.0;         // over-relaxation
+  double support_sigma = 0.05;  // relative inverse-depth jump scale of the support weights (0: all 1)
+  double min_support = 0.02;    // floor of the support weights
   bool warm_start = true;
   void validate() const;      // throws std::invalid_argument naming the key
 };
