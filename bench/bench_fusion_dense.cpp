@@ -1,0 +1,386 @@
+// Benchmark of the dense reconstruction (Delaunay meshing, NLTGV2-L1, TSDF) on a
+// render of /work/shared/tools/render_sequence.py with exact ground truth.
+//   bench_fusion_dense RENDER_DIR [--trajectory TRAJ] [--step N] [--max-frames N]
+//       [--points N] [--noise REL] [--outliers RATE] [--no-nltgv] [--out DIR]
+//       [--max-depth-2p5 M] [--weight-ref M] [--no-warm] [--nltgv-iters N] [--beta B] [--lambda L]
+// The 2.5 cm volume integrates depths <= --max-depth-2p5 (default 6 m) and its
+// completeness is measured on surface points seen within that range.
+// Frame source (until the SLAM pipeline feeds it): OpenCV KLT tracks (stable ids)
+// topped up with goodFeaturesToTrack on the rendered images; each track's depth
+// is ray cast into the true scene from the ground-truth pose, then perturbed
+// (REL inverse-depth noise, RATE outliers). --trajectory: integrate with these
+// T_w_c poses (TUM, matched by timestamp) instead of the ground truth.
+// To plug in SLAM output, fill a FrameInput per frame (see processFrame).
+// Prints per-stage timings and, as the last line, a JSON summary.
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <unordered_map>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "dense_bench_scene.h"
+#include "vitamin_e/common/timing.h"
+#include "vitamin_e/eval/trajectory.h"
+#include "vitamin_e/fusion/tsdf_volume.h"
+#include "vitamin_e/meshing/frame_mesher.h"
+#include "vitamin_e/meshing/nltgv_denoiser.h"
+
+using namespace vitamin_e;
+using dense_bench::Scene;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+
+struct Args {
+  std::string dir, trajectory, out;
+  int step = 3, max_frames = 0, points = 5000;
+  double noise = 0.01, outliers = 0.02;
+  bool nltgv = true;
+  double max_depth_hi = 6.0, weight_ref = 3.0;
+  meshing::NltgvConfig nltgv_cfg;
+};
+
+Args parse(int argc, char** argv) {
+  Args a;
+  if (argc < 2) throw std::runtime_error("usage: bench_fusion_dense RENDER_DIR [options]");
+  a.dir = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    const std::string k = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error("missing value for " + k);
+      return argv[++i];
+    };
+    if (k == "--trajectory") a.trajectory = next();
+    else if (k == "--out") a.out = next();
+    else if (k == "--step") a.step = std::stoi(next());
+    else if (k == "--max-frames") a.max_frames = std::stoi(next());
+    else if (k == "--points") a.points = std::stoi(next());
+    else if (k == "--noise") a.noise = std::stod(next());
+    else if (k == "--outliers") a.outliers = std::stod(next());
+    else if (k == "--no-nltgv") a.nltgv = false;
+    else if (k == "--max-depth-2p5") a.max_depth_hi = std::stod(next());
+    else if (k == "--weight-ref") a.weight_ref = std::stod(next());
+    else if (k == "--no-warm") a.nltgv_cfg.warm_start = false;
+    else if (k == "--nltgv-iters") a.nltgv_cfg.iterations = a.nltgv_cfg.warm_iterations = std::stoi(next());
+    else if (k == "--beta") a.nltgv_cfg.beta = std::stod(next());
+    else if (k == "--lambda") a.nltgv_cfg.lambda = std::stod(next());
+    else throw std::runtime_error("unknown option " + k);
+  }
+  return a;
+}
+
+// One frame's input to the dense reconstruction (what the SLAM pipeline provides).
+struct FrameInput {
+  Eigen::Isometry3d T_w_c;                 // pose used for integration
+  std::vector<std::uint64_t> ids;
+  std::vector<Vector2d> uv;                // pinhole pixels
+  std::vector<double> depth;               // measured z (camera frame)
+  std::vector<double> true_depth;          // ground truth z (evaluation only; <= 0 unknown)
+  Eigen::Isometry3d T_w_c_true;            // ground-truth pose (evaluation only)
+};
+
+// CPU time of the calling thread (less sensitive than wall time to a loaded machine).
+double threadCpuMs() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+double median(std::vector<double> v) { return percentile(std::move(v), 50.0); }
+
+struct Tracker {  // KLT + top-up; stands in for the VITAMIN-E front end
+  cv::Mat prev;
+  std::vector<cv::Point2f> pts;
+  std::vector<std::uint64_t> ids;
+  std::uint64_t next_id = 0;
+  void track(const cv::Mat& img, int max_points) {
+    if (!prev.empty() && !pts.empty()) {
+      std::vector<cv::Point2f> out;
+      std::vector<unsigned char> st;
+      std::vector<float> err;
+      cv::calcOpticalFlowPyrLK(prev, img, pts, out, st, err, cv::Size(21, 21), 3);
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (st[i] && out[i].x >= 0 && out[i].y >= 0 && out[i].x < img.cols && out[i].y < img.rows) {
+          pts[k] = out[i];
+          ids[k++] = ids[i];
+        }
+      pts.resize(k);
+      ids.resize(k);
+    }
+    if (static_cast<int>(pts.size()) < max_points) {
+      cv::Mat mask(img.size(), CV_8UC1, cv::Scalar(255));
+      for (const auto& p : pts) cv::circle(mask, p, 4, cv::Scalar(0), -1);
+      std::vector<cv::Point2f> fresh;
+      cv::goodFeaturesToTrack(img, fresh, max_points - static_cast<int>(pts.size()), 0.001, 4, mask);
+      for (const auto& p : fresh) {
+        pts.push_back(p);
+        ids.push_back(next_id++);
+      }
+    }
+    prev = img;
+  }
+};
+
+// Triangle hash grid for point-to-mesh distances up to one cell.
+struct MeshGrid {
+  double cell;
+  const fusion::TriangleMesh* mesh;
+  std::unordered_map<std::uint64_t, std::vector<int>> cells;
+  static std::uint64_t key(int x, int y, int z) {
+    return (static_cast<std::uint64_t>(x + (1 << 20)) << 42) | (static_cast<std::uint64_t>(y + (1 << 20)) << 21) |
+           static_cast<std::uint64_t>(z + (1 << 20));
+  }
+  MeshGrid(const fusion::TriangleMesh& m, double c) : cell(c), mesh(&m) {
+    for (int f = 0; f < static_cast<int>(m.faces.size()); ++f) {
+      Eigen::Vector3f lo = m.vertices[m.faces[f][0]], hi = lo;
+      for (int k = 1; k < 3; ++k) {
+        lo = lo.cwiseMin(m.vertices[m.faces[f][k]]);
+        hi = hi.cwiseMax(m.vertices[m.faces[f][k]]);
+      }
+      const Eigen::Vector3i a = (lo.cast<double>() / cell).array().floor().cast<int>();
+      const Eigen::Vector3i b = (hi.cast<double>() / cell).array().floor().cast<int>();
+      for (int x = a.x(); x <= b.x(); ++x)
+        for (int y = a.y(); y <= b.y(); ++y)
+          for (int z = a.z(); z <= b.z(); ++z) cells[key(x, y, z)].push_back(f);
+    }
+  }
+  double distance(const Vector3d& p) const {  // capped at `cell`
+    double best = cell;
+    const Eigen::Vector3i c = (p / cell).array().floor().cast<int>();
+    for (int x = -1; x <= 1; ++x)
+      for (int y = -1; y <= 1; ++y)
+        for (int z = -1; z <= 1; ++z) {
+          const auto it = cells.find(key(c.x() + x, c.y() + y, c.z() + z));
+          if (it == cells.end()) continue;
+          for (int f : it->second) {
+            const auto& F = mesh->faces[f];
+            const Vector3d q = dense_bench::closestOnTriangle(p, mesh->vertices[F[0]].cast<double>(),
+                                                              mesh->vertices[F[1]].cast<double>(),
+                                                              mesh->vertices[F[2]].cast<double>());
+            best = std::min(best, (q - p).norm());
+          }
+        }
+    return best;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Args args = parse(argc, argv);
+  const Scene scene = dense_bench::loadScene(args.dir + "/scene.json");
+  meshing::PinholeIntrinsics K;
+  K.fx = scene.K(0, 0), K.fy = scene.K(1, 1), K.cx = scene.K(0, 2), K.cy = scene.K(1, 2);
+  K.width = scene.width, K.height = scene.height;
+  const cv::Mat Kcv = (cv::Mat_<double>(3, 3) << K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
+  const cv::Mat dist(scene.dist, true);
+  const eval::Trajectory gt = eval::readTum(args.dir + "/groundtruth_cam0_tum.txt");
+  eval::Trajectory est;
+  if (!args.trajectory.empty()) est = eval::readTrajectory(args.trajectory);
+  auto nearest = [](const eval::Trajectory& tr, double t) -> const eval::StampedPose* {
+    auto it = std::lower_bound(tr.begin(), tr.end(), t, [](const eval::StampedPose& p, double x) { return p.t < x; });
+    const eval::StampedPose* best = nullptr;
+    for (auto c : {it, it == tr.begin() ? it : it - 1})
+      if (c != tr.end() && std::abs(c->t - t) < 0.005 && (!best || std::abs(c->t - t) < std::abs(best->t - t)))
+        best = &*c;
+    return best;
+  };
+  // Images (mav0/cam0/data.csv: timestamp_ns,filename).
+  std::vector<std::pair<double, std::string>> images;
+  {
+    std::ifstream csv(args.dir + "/mav0/cam0/data.csv");
+    std::string line;
+    while (std::getline(csv, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      const auto comma = line.find(',');
+      std::string name = line.substr(comma + 1);
+      name.erase(name.find_last_not_of(" \r\n") + 1);
+      images.emplace_back(std::stod(line.substr(0, comma)) * 1e-9, args.dir + "/mav0/cam0/data/" + name);
+    }
+  }
+  if (images.empty()) throw std::runtime_error("no images in " + args.dir + "/mav0/cam0/data.csv");
+
+  meshing::FrameMesherConfig build_cfg;  // lenient: NLTGV repairs outliers, prune() cuts afterwards
+  build_cfg.max_edge_px = 40.0;
+  build_cfg.max_inv_depth_jump = 1.0;
+  build_cfg.max_normal_angle_deg = 88.0;
+  build_cfg.max_depth = 20.0;
+  meshing::FrameMesherConfig prune_cfg = build_cfg;
+  prune_cfg.max_inv_depth_jump = 0.15;
+  prune_cfg.max_normal_angle_deg = 80.0;
+  const meshing::FrameMesher mesher(build_cfg), pruner(prune_cfg);
+  meshing::NltgvDenoiser nltgv(args.nltgv_cfg);
+  fusion::TsdfConfig c15, c25;
+  c15.voxel_size = 0.15, c15.truncation = 0.45, c15.block_voxels = 8;
+  c25.voxel_size = 0.025, c25.truncation = 0.075, c25.block_voxels = 8;
+  c25.max_depth = args.max_depth_hi;
+  c15.weight_depth_ref = c25.weight_depth_ref = args.weight_ref;
+  fusion::TsdfVolume tsdf15(c15), tsdf25(c25);
+
+  Tracker tracker;
+  StageTimings timings;
+  std::mt19937 rng(42);
+  std::normal_distribution<double> N(0.0, 1.0);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<double> raw_err, smooth_err, raw_dense, smooth_dense, mesh_ms, t15_ms, t25_ms, mesh_cpu, t15_cpu,
+      t25_cpu;
+  std::vector<Vector3d> seen;  // points on true surfaces the camera saw (completeness)
+  int processed = 0;
+  for (std::size_t f = 0; f < images.size(); f += args.step) {
+    if (args.max_frames > 0 && processed >= args.max_frames) break;
+    const eval::StampedPose* g = nearest(gt, images[f].first);
+    if (!g) continue;
+    const cv::Mat img = cv::imread(images[f].second, cv::IMREAD_GRAYSCALE);
+    if (img.empty()) throw std::runtime_error("cannot read " + images[f].second);
+    {
+      ScopedTimer t(&timings, "klt_tracking (input)");
+      tracker.track(img, args.points);
+    }
+    FrameInput in;
+    in.T_w_c_true = g->T_w_c;
+    in.T_w_c = g->T_w_c;
+    if (!est.empty()) {
+      const eval::StampedPose* e = nearest(est, images[f].first);
+      if (!e) continue;
+      in.T_w_c = e->T_w_c;
+    }
+    std::vector<cv::Point2f> und;
+    cv::undistortPoints(tracker.pts, und, Kcv, dist, cv::noArray(), Kcv);
+    const Vector3d o = in.T_w_c_true.translation();
+    for (std::size_t i = 0; i < und.size(); ++i) {
+      const Vector2d uv(und[i].x, und[i].y);
+      const double z = dense_bench::rayCast(scene, o, in.T_w_c_true.linear() * K.ray(uv));
+      if (!std::isfinite(z) || !K.inImage(uv)) continue;
+      double inv = (1.0 / z) * (1.0 + args.noise * N(rng));
+      if (U(rng) < args.outliers) inv = (1.0 / z) * std::exp(1.4 * U(rng) - 0.7);
+      in.ids.push_back(tracker.ids[i]);
+      in.uv.push_back(uv);
+      in.depth.push_back(1.0 / inv);
+      in.true_depth.push_back(z);
+    }
+    // ---- the dense reconstruction of one frame ----
+    const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = threadCpuMs();
+    meshing::FrameMesh mesh;
+    {
+      ScopedTimer t(&timings, "delaunay_mesh");
+      mesh = mesher.build(in.ids, in.uv, in.depth, K);
+    }
+    const meshing::FrameMesh raw = mesh;
+    if (args.nltgv) {
+      ScopedTimer t(&timings, "nltgv");
+      nltgv.denoise(&mesh, K);
+    }
+    meshing::FrameMesh raw_pruned = raw;
+    {
+      ScopedTimer t(&timings, "prune");
+      pruner.prune(&mesh, K);
+    }
+    pruner.prune(&raw_pruned, K);
+    mesh_ms.push_back(elapsedMs(t0));
+    const double c1 = threadCpuMs();
+    mesh_cpu.push_back(c1 - c0);
+    const auto t1 = std::chrono::steady_clock::now();
+    tsdf15.integrate(mesh, in.T_w_c, K);
+    tsdf15.updateMesh();
+    t15_ms.push_back(elapsedMs(t1));
+    const double c2 = threadCpuMs();
+    t15_cpu.push_back(c2 - c1);
+    const auto t2 = std::chrono::steady_clock::now();
+    tsdf25.integrate(mesh, in.T_w_c, K);
+    const double int25 = elapsedMs(t2);
+    tsdf25.updateMesh();
+    t25_ms.push_back(elapsedMs(t2));
+    t25_cpu.push_back(threadCpuMs() - c2);
+    timings.add("tsdf15_integrate+mc", t15_ms.back());
+    timings.add("tsdf2.5_integrate", int25);
+    timings.add("tsdf2.5_mc", t25_ms.back() - int25);
+    // ---- evaluation ----
+    std::unordered_map<std::uint64_t, double> truth;
+    for (std::size_t i = 0; i < in.ids.size(); ++i) truth[in.ids[i]] = in.true_depth[i];
+    for (const auto& v : raw.vertices) raw_err.push_back(std::abs(1.0 / v.inv_depth - truth[v.id]) / truth[v.id]);
+    for (const auto& v : mesh.vertices) smooth_err.push_back(std::abs(1.0 / v.inv_depth - truth[v.id]) / truth[v.id]);
+    const auto d_raw = fusion::TsdfVolume::rasterizeDepth(raw_pruned, K);
+    const auto d_smooth = fusion::TsdfVolume::rasterizeDepth(mesh, K);
+    for (int v = 0; v < K.height; v += 6)
+      for (int u = 0; u < K.width; u += 6) {
+        const std::size_t idx = static_cast<std::size_t>(v) * K.width + u;
+        const double z = dense_bench::rayCast(scene, o, in.T_w_c_true.linear() * K.ray(Vector2d(u, v)));
+        if (!std::isfinite(z)) continue;
+        if (d_raw[idx] > 0 && d_smooth[idx] > 0) {  // pixels covered by both meshes
+          raw_dense.push_back(std::abs(d_raw[idx] - z) / z);
+          smooth_dense.push_back(std::abs(d_smooth[idx] - z) / z);
+        }
+        if (z <= c25.max_depth && U(rng) < 0.05) seen.push_back(o + in.T_w_c_true.linear() * K.ray(Vector2d(u, v)) * z);
+      }
+    ++processed;
+  }
+  // ---- final meshes and metrics ----
+  fusion::TriangleMesh m15, m25;
+  {
+    ScopedTimer t(&timings, "assemble_mesh_15cm (once)");
+    m15 = tsdf15.extractMesh();
+  }
+  {
+    ScopedTimer t(&timings, "assemble_mesh_2.5cm (once)");
+    m25 = tsdf25.extractMesh();
+  }
+  auto accuracy = [&](const fusion::TriangleMesh& m) {
+    std::vector<double> d;
+    for (const auto& p : m.vertices) d.push_back(dense_bench::surfaceDistance(scene, p.cast<double>()));
+    return d;
+  };
+  auto completeness = [&](const fusion::TriangleMesh& m) {
+    const MeshGrid grid(m, 0.05);
+    std::size_t hit = 0;
+    for (const auto& p : seen) hit += grid.distance(p) < 0.05;
+    return seen.empty() ? 0.0 : static_cast<double>(hit) / seen.size();
+  };
+  const auto acc25 = accuracy(m25), acc15 = accuracy(m15);
+  const double comp25 = completeness(m25), comp15 = completeness(m15);
+  if (!args.out.empty()) {
+    fusion::saveMeshPly(m15, args.out + "/mesh_15cm.ply");
+    fusion::saveMeshPly(m25, args.out + "/mesh_2p5cm.ply");
+  }
+  auto minOf = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); };
+  std::printf("frames processed: %d (every %d of %zu), points/frame <= %d, noise %.3g, outliers %.3g, nltgv %s\n",
+              processed, args.step, images.size(), args.points, args.noise, args.outliers, args.nltgv ? "on" : "off");
+  std::printf("%s", timings.table().c_str());
+  std::printf("wall ms/frame (min / median), thread CPU ms/frame (min / median):\n");
+  std::printf("  mesh (delaunay+nltgv+prune): %7.2f / %7.2f   cpu %7.2f / %7.2f\n", minOf(mesh_ms), median(mesh_ms),
+              minOf(mesh_cpu), median(mesh_cpu));
+  std::printf("  tsdf 15cm integrate+mc:      %7.2f / %7.2f   cpu %7.2f / %7.2f\n", minOf(t15_ms), median(t15_ms),
+              minOf(t15_cpu), median(t15_cpu));
+  std::printf("  tsdf 2.5cm integrate+mc:     %7.2f / %7.2f   cpu %7.2f / %7.2f\n", minOf(t25_ms), median(t25_ms),
+              minOf(t25_cpu), median(t25_cpu));
+  std::printf("vertex rel. depth error: raw median %.4f p90 %.4f | nltgv median %.4f p90 %.4f\n", median(raw_err),
+              percentile(raw_err, 90), median(smooth_err), percentile(smooth_err, 90));
+  std::printf("dense rel. depth error:  raw median %.4f p90 %.4f | nltgv median %.4f p90 %.4f (%zu px)\n",
+              median(raw_dense), percentile(raw_dense, 90), median(smooth_dense), percentile(smooth_dense, 90),
+              raw_dense.size());
+  std::printf("mesh 15cm: %zu vertices %zu faces; accuracy median %.4f p90 %.4f m; completeness(5cm) %.3f\n",
+              m15.vertices.size(), m15.faces.size(), median(acc15), percentile(acc15, 90), comp15);
+  std::printf("mesh 2.5cm: %zu vertices %zu faces; accuracy median %.4f p90 %.4f m; completeness(5cm) %.3f (%zu pts)\n",
+              m25.vertices.size(), m25.faces.size(), median(acc25), percentile(acc25, 90), comp25, seen.size());
+  std::printf(
+      "{\"accuracy_median_m\":%.4f,\"accuracy_p90_m\":%.4f,\"completeness_5cm\":%.4f,\"raw_depth_err_median\":%.5f,"
+      "\"nltgv_depth_err_median\":%.5f,\"mesh_ms_per_frame\":%.2f,\"tsdf_ms_15cm\":%.2f,\"tsdf_ms_2p5cm\":%.2f,"
+      "\"raw_dense_depth_err_median\":%.5f,\"nltgv_dense_depth_err_median\":%.5f,\"mesh_cpu_ms_per_frame\":%.2f,"
+      "\"tsdf_cpu_ms_15cm\":%.2f,\"tsdf_cpu_ms_2p5cm\":%.2f,\"accuracy_median_15cm_m\":%.4f,"
+      "\"completeness_5cm_15cm\":%.4f}\n",
+      median(acc25), percentile(acc25, 90), comp25, median(raw_err), median(smooth_err), median(mesh_ms),
+      median(t15_ms), median(t25_ms), median(raw_dense), median(smooth_dense), median(mesh_cpu), median(t15_cpu),
+      median(t25_cpu), median(acc15), comp15);
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "bench_fusion_dense: %s\n", e.what());
+  return 2;
+}
