@@ -1,6 +1,6 @@
 // vitamin_e_run: runs VITAMIN-E SLAM offline over a dataset, as fast as possible.
 //   vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]
-//                 [--max-frames N] [--start-frame N] [--quiet]
+//                 [--max-frames N] [--start-frame N] [--quiet] [--check]
 // PATH: EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder, KITTI odometry
 // folder, or a .bag (ROS builds). Writes DIR/trajectory.txt (TUM, T_w_c),
 // DIR/stats.json and DIR/points.ply. SIGINT/SIGTERM stop after the current frame
@@ -34,7 +34,7 @@ namespace {
 
 const char* kUsage =
     "usage: vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]\n"
-    "                     [--max-frames N] [--start-frame N] [--quiet]\n"
+    "                     [--max-frames N] [--start-frame N] [--quiet] [--check]\n"
     "  --dataset PATH   EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder (rgb.txt),\n"
     "                   KITTI odometry folder (image_0/ or image_l/, calib.txt) or a .bag\n"
     "  --out DIR        output folder: trajectory.txt (TUM, T_w_c), stats.json, points.ply\n"
@@ -44,10 +44,21 @@ const char* kUsage =
     "  --topic T        image topic of a bag (default /cam0/image_raw)\n"
     "  --max-frames N   process at most N frames\n"
     "  --start-frame N  skip the first N frames\n"
-    "  --quiet          no progress and no summary\n";
+    "  --quiet          no progress and no summary\n"
+    "  --check          no SLAM: read every frame and print 'index timestamp WxH mean' lines\n"
+    "                   on stdout (a dataset check; --out is not needed)\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 extern "C" void onSignal(int) { g_stop = 1; }
+
+void installSignalHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = onSignal;
+  sa.sa_flags = SA_RESETHAND;  // a second signal ends the process the default way
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
 
 [[noreturn]] void fail(const std::string& msg) {
   std::cerr << "error: " << msg << std::endl;
@@ -59,6 +70,7 @@ struct Options {
   std::size_t max_frames = 0;  // 0 = all
   std::size_t start_frame = 0;
   bool quiet = false;
+  bool check = false;
 };
 
 std::size_t parseCount(const std::string& key, const std::string& v) {
@@ -84,6 +96,10 @@ Options parseArgs(int argc, char** argv) {
       o.quiet = true;
       continue;
     }
+    if (a == "--check") {
+      o.check = true;
+      continue;
+    }
     if (i + 1 >= argc) fail(a.rfind("--", 0) == 0 ? a + " needs a value" : "unexpected argument '" + a + "'");
     const std::string v = argv[++i];
     if (a == "--dataset") o.dataset = v;
@@ -96,7 +112,7 @@ Options parseArgs(int argc, char** argv) {
     else fail("unknown option '" + a + "' (see --help)");
   }
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
-  if (o.out.empty()) fail("--out DIR is required (see --help)");
+  if (o.out.empty() && !o.check) fail("--out DIR is required (see --help)");
   return o;
 }
 
@@ -157,8 +173,27 @@ class Progress {
   double last_ = -1e9;
 };
 
+// --check: reads every frame of [begin, end) and prints one line per frame.
+int checkFrames(const io::Dataset& dataset, std::size_t begin, std::size_t end) {
+  std::size_t bad = 0;
+  for (std::size_t i = begin; i < end && !g_stop; ++i) {
+    try {
+      const cv::Mat img = dataset.loadImage(i);
+      std::printf("%zu %s %dx%d %.2f\n", i, dataset.timestampText(i).c_str(), img.cols, img.rows, cv::mean(img)[0]);
+    } catch (const io::DatasetError& e) {
+      std::fprintf(stderr, "warning: %s (frame %zu)\n", e.what(), i);
+      ++bad;
+    }
+  }
+  std::fflush(stdout);
+  std::fprintf(stderr, "[vitamin_e_run] %s: %zu frames checked, %zu unreadable; calibration (%s): %s\n",
+               dataset.kind().c_str(), end - begin, bad, dataset.calibration().format.c_str(),
+               dataset.calibration().camera.describe().c_str());
+  return 0;
+}
+
 int run(const Options& o) {
-  const pl::SystemConfig config = loadConfig(o.config);
+  const pl::SystemConfig config = o.check ? pl::SystemConfig{} : loadConfig(o.config);
   const std::unique_ptr<io::Dataset> dataset = openInput(o);
   if (o.start_frame >= dataset->size()) {
     fail("--start-frame " + std::to_string(o.start_frame) + " is past the end of '" + o.dataset + "' (" +
@@ -166,6 +201,7 @@ int run(const Options& o) {
   }
   std::size_t end = dataset->size();
   if (o.max_frames > 0) end = std::min(end, o.start_frame + o.max_frames);
+  if (o.check) return checkFrames(*dataset, o.start_frame, end);
 
   std::error_code ec;
   fs::create_directories(o.out, ec);
@@ -187,13 +223,6 @@ int run(const Options& o) {
   stats.dataset = o.dataset;
   stats.dataset_kind = dataset->kind();
   stats.config = o.config;
-  struct sigaction sa {};
-  sa.sa_handler = onSignal;
-  sa.sa_flags = SA_RESETHAND;  // a second signal ends the process the default way
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-
   Progress progress(end - o.start_frame, o.quiet);
   const auto t_start = std::chrono::steady_clock::now();
   std::size_t attempted = 0;
@@ -253,6 +282,7 @@ int run(const Options& o) {
 
 int main(int argc, char** argv) {
   const Options options = parseArgs(argc, argv);
+  installSignalHandlers();
   try {
     return run(options);
   } catch (const io::DatasetError& e) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <sstream>
 
@@ -181,6 +182,86 @@ TEST_F(RunnerTest, RunsASequenceAndSkipsAnUnreadableFrame) {
                         " --quiet --start-frame 6 --max-frames 3");
   ASSERT_EQ(r2.code, 0) << r2.err;
   EXPECT_EQ(YAML::LoadFile((out / "stats.json").string())["frames"].as<int>(), 3);
+}
+
+namespace {
+// Writes a bag with one uniform image per encoding, written out of stamp order,
+// plus a message on another topic. Needs Debian's python3 rosbag.
+const char* kBagWriter = R"(import struct, sys
+import rosbag, rospy
+from sensor_msgs.msg import Image
+from std_msgs.msg import String
+W, H = 40, 30
+frames = [("mono8", 40), ("mono16", 60), ("rgb8", 80), ("bgr8", 100), ("32FC1", 120), ("mono8", 140)]
+bag = rosbag.Bag(sys.argv[1], "w")
+for k in [3, 0, 5, 1, 4, 2]:
+    enc, v = frames[k]
+    m = Image()
+    m.header.stamp = rospy.Time(1000, 50000000 * k)
+    m.header.frame_id = "cam0"
+    m.height, m.width, m.encoding, m.is_bigendian = H, W, enc, 0
+    n = W * H
+    if enc == "mono8":
+        m.step, m.data = W, bytes([v]) * n
+    elif enc == "mono16":
+        m.step, m.data = 2 * W, struct.pack("<%dH" % n, *([v * 256 + 77] * n))
+    elif enc in ("rgb8", "bgr8"):
+        m.step, m.data = 3 * W, bytes([v, v, v]) * n
+    else:
+        m.step, m.data = 4 * W, struct.pack("<%df" % n, *([0.5] * n))
+    bag.write("/cam0/image_raw", m, rospy.Time(2000 + k))
+bag.write("/other", String(data="x"), rospy.Time(2000))
+bag.close()
+)";
+}  // namespace
+
+TEST_F(RunnerTest, ReadsRosbagsWithEveryEncoding) {
+  write(dir_ / "write_bag.py", kBagWriter);
+  const fs::path bag = dir_ / "t.bag";
+  const std::string py = "/usr/bin/python3 " + (dir_ / "write_bag.py").string() + " " + bag.string() + " 2>/dev/null";
+  if (std::system(py.c_str()) != 0 || !fs::exists(bag)) GTEST_SKIP() << "python3 rosbag not available";
+  write(dir_ / "calib.yaml", "image_width: 40\nimage_height: 30\n"
+                             "camera_matrix: {rows: 3, cols: 3, data: [30, 0, 20, 0, 30, 15, 0, 0, 1]}\n"
+                             "distortion_model: plumb_bob\ndistortion_coefficients: [0, 0, 0, 0, 0]\n");
+  const std::string calib = " --calib " + (dir_ / "calib.yaml").string();
+  const fs::path listing = dir_ / "frames.txt";
+  const std::string cmd = runner_.string() + " --check --dataset " + bag.string() + calib + " >" + listing.string() +
+                          " 2>" + (dir_ / "err.txt").string();
+  const int status = std::system(cmd.c_str());
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 2) {
+    // A build without the ROS layer reads no bags: it must say so.
+    std::ifstream e(dir_ / "err.txt");
+    std::string msg((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
+    ASSERT_NE(msg.find("no ROS layer"), std::string::npos) << msg;
+    GTEST_SKIP() << "runner built without ROS";
+  }
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  std::ifstream in(listing);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  // Sorted by header stamp, exact stamp text, every encoding as gray; 32FC1 skipped with a warning.
+  const std::vector<std::string> want = {"0 1000.000000000 40x30 40.00", "1 1000.050000000 40x30 60.00",
+                                         "2 1000.100000000 40x30 80.00", "3 1000.150000000 40x30 100.00",
+                                         "5 1000.250000000 40x30 140.00"};
+  EXPECT_EQ(lines, want);
+  std::ifstream e(dir_ / "err.txt");
+  const std::string err((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
+  EXPECT_NE(err.find("warning: "), std::string::npos) << err;
+  EXPECT_NE(err.find("32FC1"), std::string::npos) << err;
+
+  const std::string out = " --out " + (dir_ / "out").string();
+  expectBadInput("--dataset " + bag.string() + out, "calibration file is required");
+  expectBadInput("--dataset " + bag.string() + out + calib + " --topic /cam1/image_raw", "/cam0/image_raw");
+  expectBadInput("--dataset " + bag.string() + out + calib + " --topic /other", "no sensor_msgs/Image");
+  {
+    std::ifstream full(bag, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(full)), std::istreambuf_iterator<char>());
+    std::ofstream(dir_ / "cut.bag", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
+  expectBadInput("--dataset " + (dir_ / "cut.bag").string() + out + calib, "cut.bag");
+  write(dir_ / "small.yaml", "image_width: 20\nimage_height: 30\n"
+                             "camera_matrix: {rows: 3, cols: 3, data: [30, 0, 10, 0, 30, 15, 0, 0, 1]}\n");
+  expectBadInput("--dataset " + bag.string() + out + " --calib " + (dir_ / "small.yaml").string(), "20x30");
 }
 
 int main(int argc, char** argv) {
