@@ -197,7 +197,13 @@ bool reproject(const Radtan& cam, const Scene& sc, const Frame& a, const Frame& 
 struct RunStats {
   std::vector<double> points, ms, cpu, lengths;
   long inliers = 0, checked = 0;
+  long drift_inliers = 0, drift_checked = 0;  // at age kDriftAge vs the birth observation
+  std::vector<double> drift_err;
 };
+
+// Accumulated drift: a track aged kDriftAge frames is compared with the
+// ground-truth reprojection of its first observation.
+constexpr int kDriftAge = 10;
 
 // CPU time of the whole process (all threads) [ms]: unlike wall time it is not
 // inflated by other processes competing for the cores.
@@ -235,6 +241,9 @@ int main(int argc, char** argv) {
     else if (k == "--parallax") cfg.predict_parallax = std::stoi(argv[i + 1]);
     else if (k == "--ksigma") cfg.kappa_smoothing_sigma = std::stod(argv[i + 1]);
     else if (k == "--polish") cfg.polish_steps = std::stoi(argv[i + 1]);
+    else if (k == "--adaptive") cfg.adaptive_smoothing = std::stoi(argv[i + 1]);
+    else if (k == "--max-sigma") cfg.max_smoothing_sigma = std::stod(argv[i + 1]);
+    else if (k == "--noise-ref") cfg.noise_reference = std::stod(argv[i + 1]);
     else if (k == "--nms") cfg.nms_radius_px = std::stoi(argv[i + 1]);
     else if (k == "--track-sigma") cfg.track_sigma_px = std::stod(argv[i + 1]);
     else if (k == "--min-track-curvature") cfg.min_track_curvature = std::stod(argv[i + 1]);
@@ -254,6 +263,7 @@ int main(int argc, char** argv) {
   RunStats ours;
   vt::DenseTracker tracker(cfg);
   std::unordered_map<std::uint64_t, Eigen::Vector2f> prev;
+  std::unordered_map<std::uint64_t, std::pair<Eigen::Vector2f, size_t>> birth;
   std::unordered_map<std::uint64_t, int> life;
   std::vector<double> tracked_pf, flow_ok_pf;
   std::map<std::string, std::vector<double>> stage;
@@ -268,6 +278,8 @@ int main(int argc, char** argv) {
     ours.ms.push_back(ms);
     ours.cpu.push_back(cpuMs() - c0);
     for (const auto& kv : tf.timing_ms) stage[kv.first].push_back(kv.second);
+    stage["(smoothing sigma px)"].push_back(tf.smoothing_sigma);
+    stage["(noise ratio)"].push_back(tf.noise_ratio);
     if (k > 0) {
       tracked_pf.push_back(tf.num_tracked);
       flow_ok_pf.push_back(tf.flow_ok);
@@ -277,6 +289,17 @@ int main(int argc, char** argv) {
     for (const auto& p : tf.points) {
       cur[p.id] = p.uv;
       life[p.id] = p.age + 1;
+      if (p.age == 0) birth[p.id] = {p.uv, k};
+      if (p.age == kDriftAge) {
+        const auto& b = birth[p.id];
+        Eigen::Vector2d truth;
+        if (reproject(cam, scene, frames[b.second], frames[k], b.first.cast<double>(), &truth)) {
+          const double e = (p.uv.cast<double>() - truth).norm();
+          ++ours.drift_checked;
+          ours.drift_inliers += e <= 1.0;
+          ours.drift_err.push_back(e);
+        }
+      }
       if (p.age == 0 || k == 0) continue;
       auto it = prev.find(p.id);
       if (it == prev.end()) continue;
@@ -296,6 +319,7 @@ int main(int argc, char** argv) {
   const int n_klt = run_klt ? static_cast<int>(median(ours.points)) : 0;
   std::vector<cv::Point2f> pts;
   std::vector<int> ages;
+  std::vector<std::pair<cv::Point2f, size_t>> births, next_births;
   std::vector<int> klt_life;
   for (size_t k = 0; k < frames.size(); ++k) {
     const auto t0 = Clock::now();
@@ -317,6 +341,7 @@ int main(int argc, char** argv) {
         next[j] = q;
         from.push_back(pts[i]);
         next_age.push_back(ages[i] + 1);
+        next_births.push_back(births[i]);
         ++j;
       }
       next.resize(j);
@@ -327,7 +352,11 @@ int main(int argc, char** argv) {
       for (const auto& q : next) cv::circle(mask, q, 3, cv::Scalar(0), -1);
       std::vector<cv::Point2f> fresh;
       cv::goodFeaturesToTrack(images[k], fresh, n_klt - static_cast<int>(next.size()), 0.001, 3, mask);
-      for (const auto& q : fresh) { next.push_back(q); next_age.push_back(0); }
+      for (const auto& q : fresh) {
+        next.push_back(q);
+        next_age.push_back(0);
+        next_births.push_back({q, k});
+      }
     }
     klt.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     klt.cpu.push_back(cpuMs() - c0);
@@ -338,6 +367,18 @@ int main(int argc, char** argv) {
       ++klt.checked;
       if ((Eigen::Vector2d(next[i].x, next[i].y) - truth).norm() <= 1.0) ++klt.inliers;
     }
+    for (size_t i = 0; i < next.size(); ++i) {
+      if (next_age[i] != kDriftAge) continue;
+      Eigen::Vector2d truth;
+      const auto& b = next_births[i];
+      if (!reproject(cam, scene, frames[b.second], frames[k], Eigen::Vector2d(b.first.x, b.first.y), &truth)) continue;
+      const double e = (Eigen::Vector2d(next[i].x, next[i].y) - truth).norm();
+      ++klt.drift_checked;
+      klt.drift_inliers += e <= 1.0;
+      klt.drift_err.push_back(e);
+    }
+    births.swap(next_births);
+    next_births.clear();
     pts.swap(next);
     ages.swap(next_age);
   }
@@ -358,6 +399,10 @@ int main(int argc, char** argv) {
   std::printf("%-34s %14.0f %14.0f\n", "track length median [frames]", median(ours.lengths), median(klt.lengths));
   std::printf("%-34s %14.4f %14.4f\n", "track steps within 1 px", our_ratio, klt_ratio);
   std::printf("%-34s %14ld %14ld\n", "track steps checked", ours.checked, klt.checked);
+  std::printf("%-34s %14.4f %14.4f\n", "after 10 frames within 1 px", ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
+              klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
+  std::printf("%-34s %14.3f %14.3f\n", "after 10 frames median error px", median(ours.drift_err), median(klt.drift_err));
+  std::printf("%-34s %14ld %14ld\n", "tracks reaching 10 frames", ours.drift_checked, klt.drift_checked);
   std::printf("%-34s %14.3f %14s\n", "flow_ok fraction", flow_ok_pf.empty() ? 0.0 : std::accumulate(flow_ok_pf.begin(), flow_ok_pf.end(), 0.0) / flow_ok_pf.size(), "");
   std::printf("%-34s %.3f %.3f %.3f %.3f %.3f\n", "error <.25 <.5 <1 <2 >=2 px", hist[0] / (double)ours.checked,
               hist[1] / (double)ours.checked, hist[2] / (double)ours.checked, hist[3] / (double)ours.checked,

@@ -42,6 +42,32 @@ struct SmallFeatures {
   std::vector<signed char> sign;
 };
 
+// Noise sigma (Immerkaer 1996: mean |I * [1 -2 1; -2 4 -2; 1 -2 1]| * sqrt(pi/2) / 6)
+// over the median raw gradient magnitude, on a sparse set of rows.
+double noiseToGradientRatio(const cv::Mat& g, std::vector<float>* grad) {
+  grad->clear();
+  double sum = 0.0;
+  long n = 0;
+  for (int y = 1; y + 1 < g.rows; y += 4) {
+    const std::uint8_t* a = g.ptr<std::uint8_t>(y - 1);
+    const std::uint8_t* b = g.ptr<std::uint8_t>(y);
+    const std::uint8_t* c = g.ptr<std::uint8_t>(y + 1);
+    for (int x = 1; x + 1 < g.cols; x += 2) {
+      const int lap = (a[x - 1] - 2 * a[x] + a[x + 1]) - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) +
+                      (c[x - 1] - 2 * c[x] + c[x + 1]);
+      sum += std::abs(lap);
+      ++n;
+      const float gx = 0.5f * (b[x + 1] - b[x - 1]), gy = 0.5f * (c[x] - a[x]);
+      grad->push_back(std::sqrt(gx * gx + gy * gy));
+    }
+  }
+  if (n == 0) return 0.0;
+  const double noise = std::sqrt(M_PI / 2.0) / 6.0 * sum / n;
+  auto mid = grad->begin() + static_cast<long>(grad->size() / 2);
+  std::nth_element(grad->begin(), mid, grad->end());
+  return *mid > 1e-6f ? noise / *mid : 0.0;
+}
+
 }  // namespace
 
 struct DenseTracker::Impl {
@@ -59,6 +85,8 @@ struct DenseTracker::Impl {
   cv::Mat blocked;  // CV_8UC1: 1 within nms radius of a surviving track
   std::vector<Extremum> cands;
   std::vector<int> cell_count, cell_slots;
+  std::vector<float> scratch;
+  double sigma_state = 0.0;  // smoothed adaptive sigma (0 = not yet set)
 
   explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
 
@@ -221,6 +249,7 @@ void DenseTracker::reset() {
   impl_->has_prev = false;
   impl_->tracks.clear();
   impl_->prev_small = SmallFeatures{};
+  impl_->sigma_state = 0.0;
 }
 
 void DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
@@ -248,7 +277,17 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   m.size = gray.size();
 
   auto t = Clock::now();
-  computeCurvature(gray, cfg.smoothing_sigma, &m.kappa, cfg.threads);
+  double sigma = cfg.smoothing_sigma;
+  if (cfg.adaptive_smoothing) {
+    out.noise_ratio = noiseToGradientRatio(gray, &m.scratch);
+    const double target = std::clamp(cfg.smoothing_sigma * std::sqrt(std::max(1.0, out.noise_ratio / cfg.noise_reference)),
+                                      cfg.smoothing_sigma, cfg.max_smoothing_sigma);
+    // Slow and quantized: consecutive curvature images stay comparable.
+    m.sigma_state = m.sigma_state > 0.0 ? 0.8 * m.sigma_state + 0.2 * target : target;
+    sigma = std::round(m.sigma_state * 4.0) / 4.0;
+  }
+  out.smoothing_sigma = sigma;
+  computeCurvature(gray, sigma, &m.kappa, cfg.threads);
   if (cfg.kappa_smoothing_sigma > 0.0) {
     const int k = 2 * static_cast<int>(std::ceil(2.5 * cfg.kappa_smoothing_sigma)) + 1;
     cv::GaussianBlur(m.kappa, m.kappa, cv::Size(k, k), cfg.kappa_smoothing_sigma, cfg.kappa_smoothing_sigma,

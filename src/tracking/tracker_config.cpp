@@ -21,6 +21,9 @@ void TrackerConfig::validate() const {
   require(border_px >= 2, "border_px", "must be >= 2");
   require(std::isfinite(smoothing_sigma) && smoothing_sigma >= 0.0 && smoothing_sigma <= 10.0, "smoothing_sigma",
           "must be in [0, 10]");
+  require(std::isfinite(max_smoothing_sigma) && max_smoothing_sigma >= smoothing_sigma && max_smoothing_sigma <= 10.0,
+          "max_smoothing_sigma", "must be in [smoothing_sigma, 10]");
+  require(std::isfinite(noise_reference) && noise_reference > 0.0, "noise_reference", "must be > 0");
   require(std::isfinite(kappa_smoothing_sigma) && kappa_smoothing_sigma >= 0.0 && kappa_smoothing_sigma <= 10.0,
           "kappa_smoothing_sigma", "must be in [0, 10]");
   require(std::isfinite(min_curvature) && min_curvature >= 0.0, "min_curvature", "must be finite and >= 0");

@@ -30,6 +30,9 @@ struct TrackerConfig {
   int nms_radius_px = 2;            // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
   int border_px = 8;                // no point closer than this to the image border (>= 2)
   double smoothing_sigma = 2.0;     // Gaussian pre-smoothing before derivatives [px] (0 = none)
+  bool adaptive_smoothing = true;   // raise the smoothing on noisy images (noise / median gradient above noise_reference)
+  double max_smoothing_sigma = 3.0; // upper bound of the adaptive smoothing [px] (>= smoothing_sigma)
+  double noise_reference = 0.45;    // noise sigma / median |raw gradient| above which smoothing grows as sqrt(ratio/ref) (> 0)
   double kappa_smoothing_sigma = 0.0;  // Gaussian smoothing of kappa itself before extrema/tracking [px] (0 = none)
   double min_curvature = 1.0;       // detection threshold on |kappa| / median|kappa| (>= 0)
   double min_abs_curvature = 0.5;   // absolute floor on |kappa| [DN^3/px^4]; flat/black images give nothing
@@ -76,6 +79,8 @@ struct TrackerFrame {
   bool flow_ok = false;              // the affine fit had >= flow_min_matches inliers
   int flow_matches = 0;              // BRIEF matches used by the fit (after cross-check/ratio)
   int num_tracked = 0, num_new = 0, num_lost = 0;
+  double noise_ratio = 0;            // estimated image noise sigma / median |gradient| of this frame
+  double smoothing_sigma = 0;        // pre-smoothing used for this frame [px]
   std::map<std::string, double> timing_ms;  // "curvature", "flow", "track", "detect", "total"
 };
 
