@@ -265,7 +265,7 @@ int run(const Options& o) {
     std::fprintf(stderr, "[vitamin_e_run] %zu frames, %zu tracked (%.1f%%), %zu skipped, %d init retries, %zu map points\n",
                  stats.frames, stats.tracked_frames, 100.0 * stats.successRate(), stats.skipped_frames,
                  stats.init_retries, stats.map_points);
-    std::fprintf(stderr, "%s", stats.timing.table().c_str());
+    std::fprintf(stderr, "%s", io::timingTable(stats.timing).c_str());
     std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s (peak RSS %.0f MB)\n", traj_path.c_str(),
                  stats_path.c_str(), ply_path.c_str(), stats.peak_rss_mb);
   }

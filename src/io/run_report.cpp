@@ -42,6 +42,31 @@ void RunStats::addFrame(bool tracked, std::size_t points, std::size_t mapped,
   timing.add("total", total_ms);
 }
 
+std::vector<std::string> reportStages(const StageTimings& timing) {
+  std::vector<std::string> out;
+  for (const std::string& s : timing.stages()) {
+    if (s != "image_load" && s != "total") out.push_back(s);
+  }
+  for (const char* last : {"image_load", "total"}) {
+    if (timing.summary(last).count > 0) out.emplace_back(last);
+  }
+  return out;
+}
+
+std::string timingTable(const StageTimings& timing) {
+  std::string out;
+  char line[160];
+  std::snprintf(line, sizeof(line), "%-24s %10s %10s %10s %8s\n", "stage", "mean ms", "median ms", "p95 ms", "count");
+  out += line;
+  for (const std::string& s : reportStages(timing)) {
+    const TimingSummary t = timing.summary(s);
+    std::snprintf(line, sizeof(line), "%-24s %10.2f %10.2f %10.2f %8zu\n", s.c_str(), t.mean_ms, t.median_ms, t.p95_ms,
+                  t.count);
+    out += line;
+  }
+  return out;
+}
+
 std::string jsonString(const std::string& s) {
   std::string out = "\"";
   for (unsigned char c : s) {
@@ -80,7 +105,7 @@ std::string toJson(const RunStats& s) {
   os << "  \"points_per_frame\": " << meanMedian(s.points_per_frame) << ",\n";
   os << "  \"mapped_points_per_frame\": " << meanMedian(s.mapped_points_per_frame) << ",\n";
   os << "  \"timing_ms\": {";
-  const auto& stages = s.timing.stages();
+  const std::vector<std::string> stages = reportStages(s.timing);
   for (std::size_t i = 0; i < stages.size(); ++i) {
     const TimingSummary t = s.timing.summary(stages[i]);
     os << (i ? "," : "") << "\n    " << jsonString(stages[i]) << ": {\"mean\": " << number(t.mean_ms)

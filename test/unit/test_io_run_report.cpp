@@ -45,6 +45,12 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   EXPECT_EQ(j["timing_ms"]["total"]["count"].as<int>(), 3);
   EXPECT_DOUBLE_EQ(j["fps"].as<double>(), 1.5);
   EXPECT_GT(j["peak_rss_mb"].as<double>(), 1.0);
+  // Reports list the system's stages first and "total" last.
+  const std::vector<std::string> order = reportStages(s.timing);
+  EXPECT_EQ(order, (std::vector<std::string>{"tracking", "ba", "total"}));
+  const std::string table = timingTable(s.timing);
+  EXPECT_LT(table.find("ba"), table.find("total"));
+  EXPECT_NE(table.find("27.70"), std::string::npos) << table;
 }
 
 TEST(RunReport, EmptyRunIsStillValidJson) {

@@ -32,6 +32,12 @@ struct RunStats {
   double successRate() const { return frames ? static_cast<double>(tracked_frames) / frames : 0.0; }
 };
 
+// Stage names for reports: the system's stages in first-seen order, then
+// "image_load", then "total".
+std::vector<std::string> reportStages(const StageTimings& timing);
+// Readable table (stage, mean, median, p95, count) in reportStages() order.
+std::string timingTable(const StageTimings& timing);
+
 // stats.json: frames, tracked_frames, success_rate, init_retries,
 // points_per_frame {mean, median}, timing_ms {stage: {mean, median, p95}}, peak_rss_mb, ...
 std::string toJson(const RunStats& stats);
