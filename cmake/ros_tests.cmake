@@ -1,0 +1,38 @@
+# rostests of the ROS layer (included by cmake/tests.cmake when testing is on).
+# test/ros/<name>.test.in is configured into the build tree (it names the test
+# data made at build time) and registered with add_rostest, so ctest (and
+# ./scripts/test.sh) runs it. One gtest executable serves every .test file.
+find_package(rostest REQUIRED)
+
+set(VE_TEST_DATA ${CMAKE_CURRENT_BINARY_DIR}/rostest_data)
+set(VE_TEST_OUT ${CMAKE_CURRENT_BINARY_DIR}/rostest_out)
+set(VE_TEST_FRAMES 60)
+file(MAKE_DIRECTORY ${VE_TEST_OUT})
+
+# The input sequence: the project's generator when it is built, else a room
+# ray-cast by the script itself.
+set(_ve_bag_args ${VE_TEST_DATA} --frames ${VE_TEST_FRAMES})
+set(_ve_bag_deps ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/make_test_bag.py ${CMAKE_CURRENT_SOURCE_DIR}/scripts/make_bag.sh)
+if(TARGET vitamin_e_make_sequence)
+  list(APPEND _ve_bag_args --generator $<TARGET_FILE:vitamin_e_make_sequence>
+    --make-bag ${CMAKE_CURRENT_SOURCE_DIR}/scripts/make_bag.sh)
+  list(APPEND _ve_bag_deps vitamin_e_make_sequence)
+endif()
+add_custom_command(OUTPUT ${VE_TEST_DATA}/sequence.bag
+  COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/make_test_bag.py ${_ve_bag_args}
+  DEPENDS ${_ve_bag_deps}
+  COMMENT "rostest input sequence -> ${VE_TEST_DATA}")
+add_custom_target(vitamin_e_rostest_data DEPENDS ${VE_TEST_DATA}/sequence.bag)
+
+add_executable(test_ros_nodelets EXCLUDE_FROM_ALL ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/test_ros_nodelets.cpp)
+target_include_directories(test_ros_nodelets PRIVATE ${VITAMIN_E_ROS_INCLUDES} ${GTEST_INCLUDE_DIRS})
+target_link_libraries(test_ros_nodelets ${GTEST_LIBRARIES} vitamin_e_eval ${catkin_LIBRARIES})
+add_dependencies(test_ros_nodelets ${${PROJECT_NAME}_EXPORTED_TARGETS} ${catkin_EXPORTED_TARGETS})
+add_dependencies(tests test_ros_nodelets vitamin_e_rostest_data)
+
+file(GLOB _ve_rostests CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/*.test.in)
+foreach(in ${_ve_rostests})
+  get_filename_component(name ${in} NAME_WE)
+  configure_file(${in} ${CMAKE_CURRENT_BINARY_DIR}/rostest/${name}.test @ONLY)
+  add_rostest(${CMAKE_CURRENT_BINARY_DIR}/rostest/${name}.test DEPENDENCIES test_ros_nodelets vitamin_e_rostest_data)
+endforeach()

@@ -1,0 +1,75 @@
+#pragma once
+// Helpers of the rostests: a subscription that keeps what arrived and waits for
+// a condition with a timeout (never a bare sleep), and a /rosout watcher.
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+
+namespace vitamin_e_test {
+
+template <class Msg>
+class Watcher {
+ public:
+  Watcher(ros::NodeHandle& nh, const std::string& topic, uint32_t queue = 100) {
+    sub_ = nh.subscribe<Msg>(topic, queue, [this](const typename Msg::ConstPtr& msg) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      messages_.push_back(msg);
+      cv_.notify_all();
+    });
+  }
+  // Waits (callbacks run on an AsyncSpinner) until pred(messages) holds.
+  bool waitFor(const std::function<bool(const std::vector<typename Msg::ConstPtr>&)>& pred, double timeout_s) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (!pred(messages_)) {
+      if (!ros::ok() || cv_.wait_until(lock, deadline) == std::cv_status::timeout) return pred(messages_);
+    }
+    return true;
+  }
+  bool waitForCount(std::size_t n, double timeout_s) {
+    return waitFor([n](const auto& m) { return m.size() >= n; }, timeout_s);
+  }
+  bool waitForPublisher(double timeout_s) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (sub_.getNumPublishers() == 0) {
+      if (!ros::ok() || std::chrono::steady_clock::now() > deadline) return false;
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait_for(lock, std::chrono::milliseconds(20));  // connection has no event to wait on: poll
+    }
+    return true;
+  }
+  std::vector<typename Msg::ConstPtr> messages() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return messages_;
+  }
+  void clear() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    messages_.clear();
+  }
+
+ private:
+  ros::Subscriber sub_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::vector<typename Msg::ConstPtr> messages_;
+};
+
+// Waits for an ERROR (or FATAL) on /rosout whose text contains `needle`.
+inline bool waitForLogError(Watcher<rosgraph_msgs::Log>& rosout, const std::string& needle, double timeout_s) {
+  return rosout.waitFor(
+      [&](const std::vector<rosgraph_msgs::Log::ConstPtr>& logs) {
+        for (const auto& log : logs) {
+          if (log->level >= rosgraph_msgs::Log::ERROR && log->msg.find(needle) != std::string::npos) return true;
+        }
+        return false;
+      },
+      timeout_s);
+}
+
+}  // namespace vitamin_e_test
