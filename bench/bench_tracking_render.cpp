@@ -24,6 +24,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "vitamin_e/camera/camera.h"
 #include "vitamin_e/common/timing.h"
 #include "vitamin_e/tracking/dense_tracker.h"
 
@@ -32,32 +33,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 namespace vt = vitamin_e::tracking;
 
-// ---- camera (EuRoC cam0 radtan), read from scene.json-compatible constants ----
-struct Radtan {
-  double fu = 458.654, fv = 457.296, cu = 367.215, cv = 248.375;
-  double k1 = -0.28340811, k2 = 0.07395907, p1 = 0.00019359, p2 = 1.76187114e-05;
-  int w = 752, h = 480;
-  Eigen::Vector2d distort(const Eigen::Vector2d& n) const {
-    const double x = n.x(), y = n.y(), r2 = x * x + y * y;
-    const double rad = 1 + k1 * r2 + k2 * r2 * r2;
-    const double xd = x * rad + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
-    const double yd = y * rad + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
-    return {fu * xd + cu, fv * yd + cv};
-  }
-  // Distorted pixel -> normalized, Gauss-Newton with a numeric Jacobian.
-  Eigen::Vector2d undistort(const Eigen::Vector2d& uv) const {
-    Eigen::Vector2d n((uv.x() - cu) / fu, (uv.y() - cv) / fv);
-    for (int it = 0; it < 20; ++it) {
-      const Eigen::Vector2d r = distort(n) - uv;
-      if (r.squaredNorm() < 1e-20) break;
-      const double h = 1e-7;
-      Eigen::Matrix2d J;
-      J.col(0) = (distort(n + Eigen::Vector2d(h, 0)) - distort(n)) / h;
-      J.col(1) = (distort(n + Eigen::Vector2d(0, h)) - distort(n)) / h;
-      n -= J.inverse() * r;
-    }
-    return n;
-  }
+// ---- camera: the render's calibration through the camera module ----
+struct LensModel {
+  vitamin_e::camera::Camera cam;
+  int w = 0, h = 0;
+  Eigen::Vector2d distort(const Eigen::Vector2d& n) const { return cam.distortNormalized(n); }
+  bool undistort(const Eigen::Vector2d& uv, Eigen::Vector2d* n) const { return cam.unprojectNormalized(uv, n); }
 };
 
 // ---- scene: room (seen from inside) + axis-aligned boxes (seen from outside) ----
@@ -177,9 +158,10 @@ std::vector<Frame> loadFrames(const std::string& dir) {
 
 // Ground-truth reprojection of pixel uv of frame a into frame b; false when
 // the point leaves the image, has no surface or is occluded in b.
-bool reproject(const Radtan& cam, const Scene& sc, const Frame& a, const Frame& b, const Eigen::Vector2d& uv,
+bool reproject(const LensModel& cam, const Scene& sc, const Frame& a, const Frame& b, const Eigen::Vector2d& uv,
                Eigen::Vector2d* out) {
-  const Eigen::Vector2d n = cam.undistort(uv);
+  Eigen::Vector2d n;
+  if (!cam.undistort(uv, &n)) return false;
   const Eigen::Vector3d d = (a.T_w_c.linear() * Eigen::Vector3d(n.x(), n.y(), 1.0)).normalized();
   const Eigen::Vector3d o = a.T_w_c.translation();
   const double t = sc.cast(o, d);
@@ -251,7 +233,10 @@ int main(int argc, char** argv) {
     else if (k == "--klt") run_klt = std::stoi(argv[i + 1]);
     else { std::fprintf(stderr, "unknown option %s\n", k.c_str()); return 2; }
   }
-  const Radtan cam;
+  LensModel cam;
+  cam.cam = vitamin_e::camera::loadEurocSensorYaml(dir + "/mav0/cam0/sensor.yaml").camera;
+  cam.w = cam.cam.width();
+  cam.h = cam.cam.height();
   const Scene scene = loadScene(dir + "/scene.json");
   std::vector<Frame> frames = loadFrames(dir);
   if (static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);

@@ -11,6 +11,7 @@
 #include "vitamin_e/tracking/affine_flow.h"
 #include "vitamin_e/tracking/brief.h"
 #include "vitamin_e/tracking/curvature.h"
+#include "tracker_internal.h"
 
 namespace vitamin_e::tracking {
 namespace {
@@ -35,38 +36,6 @@ struct Step {
   bool ok = false;
 };
 
-// Keypoints and descriptors of the shrunk image, positions in full-res pixels.
-struct SmallFeatures {
-  std::vector<Eigen::Vector2d> pos;
-  std::vector<BriefDescriptor> desc;
-  std::vector<signed char> sign;
-};
-
-// Noise sigma (Immerkaer 1996: mean |I * [1 -2 1; -2 4 -2; 1 -2 1]| * sqrt(pi/2) / 6)
-// over the median raw gradient magnitude, on a sparse set of rows.
-double noiseToGradientRatio(const cv::Mat& g, std::vector<float>* grad) {
-  grad->clear();
-  double sum = 0.0;
-  long n = 0;
-  for (int y = 1; y + 1 < g.rows; y += 4) {
-    const std::uint8_t* a = g.ptr<std::uint8_t>(y - 1);
-    const std::uint8_t* b = g.ptr<std::uint8_t>(y);
-    const std::uint8_t* c = g.ptr<std::uint8_t>(y + 1);
-    for (int x = 1; x + 1 < g.cols; x += 2) {
-      const int lap = (a[x - 1] - 2 * a[x] + a[x + 1]) - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) +
-                      (c[x - 1] - 2 * c[x] + c[x + 1]);
-      sum += std::abs(lap);
-      ++n;
-      const float gx = 0.5f * (b[x + 1] - b[x - 1]), gy = 0.5f * (c[x] - a[x]);
-      grad->push_back(std::sqrt(gx * gx + gy * gy));
-    }
-  }
-  if (n == 0) return 0.0;
-  const double noise = std::sqrt(M_PI / 2.0) / 6.0 * sum / n;
-  auto mid = grad->begin() + static_cast<long>(grad->size() / 2);
-  std::nth_element(grad->begin(), mid, grad->end());
-  return *mid > 1e-6f ? noise / *mid : 0.0;
-}
 
 }  // namespace
 
@@ -90,42 +59,9 @@ struct DenseTracker::Impl {
 
   explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
 
-  void smallFeatures(const cv::Mat& gray, SmallFeatures* out) const;
   void trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale);
   int detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh);
 };
-
-void DenseTracker::Impl::smallFeatures(const cv::Mat& gray, SmallFeatures* out) const {
-  out->pos.clear();
-  out->desc.clear();
-  out->sign.clear();
-  const int sw = std::max(1, static_cast<int>(std::lround(gray.cols * cfg.brief_scale)));
-  const int sh = std::max(1, static_cast<int>(std::lround(gray.rows * cfg.brief_scale)));
-  const int r = brief.radius();
-  if (sw <= 2 * r + 4 || sh <= 2 * r + 4) return;
-  cv::Mat small, ks, smoothed;
-  cv::resize(gray, small, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
-  computeCurvature(small, 1.0, &ks, 1, &smoothed);
-  const float scale = robustCurvatureScale(ks, 1);
-  if (scale <= 0.f) return;
-  std::vector<Extremum> ex;
-  detectExtrema(ks, 1, std::max(scale * static_cast<float>(cfg.min_curvature), 1e-6f), r + 1, &ex, 1);
-  if (static_cast<int>(ex.size()) > cfg.brief_max_keypoints) {
-    std::nth_element(ex.begin(), ex.begin() + cfg.brief_max_keypoints, ex.end(),
-                     [](const Extremum& a, const Extremum& b) { return std::fabs(a.kappa) > std::fabs(b.kappa); });
-    ex.resize(cfg.brief_max_keypoints);
-  }
-  const double fx = static_cast<double>(gray.cols) / sw, fy = static_cast<double>(gray.rows) / sh;
-  for (const Extremum& e : ex) {
-    BriefDescriptor d;
-    if (!brief.describe(smoothed, e.x, e.y, &d)) continue;
-    const float s = e.kappa > 0.f ? 1.f : -1.f;
-    const Eigen::Vector2f p = refineSubpixel(ks, Eigen::Vector2i(e.x, e.y), s);
-    out->pos.emplace_back((p.x() + 0.5) * fx - 0.5, (p.y() + 0.5) * fy - 0.5);
-    out->desc.push_back(d);
-    out->sign.push_back(static_cast<signed char>(s));
-  }
-}
 
 void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale) {
   const Eigen::Matrix2f Af = A.cast<float>();
@@ -298,7 +234,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
 
   // Dominant flow from BRIEF matches on the shrunk image.
   t = Clock::now();
-  m.smallFeatures(gray, &m.small);
+  extractSmallFeatures(gray, cfg, m.brief, &m.small);
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();  // no flow: identity
   if (m.has_prev) {
