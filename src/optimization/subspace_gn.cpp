@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 #include <thread>
+#include <cstdio>
+#include <cstdlib>
 
 #include "vitamin_e/geometry/lie.h"
 #include "vitamin_e/geometry/projection.h"
@@ -93,6 +95,7 @@ class SubspaceGn {
         break;
       }
       const double rel = (cost - new_cost) / std::max(cost, 1e-300);
+      if (getenv("SGN_DEBUG")) fprintf(stderr, "sweep %d cost %.6f -> %.6f rel %.3e lambda %.1e\n", sweep, cost, new_cost, rel, lambda);
       cost = new_cost;
       if (rel < O_.tolerance) {
         *converged = true;
@@ -210,19 +213,20 @@ class SubspaceGn {
           const Eigen::Vector2d r = o.uv - K_.project(p_c);
           const double sq = r.squaredNorm();
           cost += kernel_.rho(sq);
-          const double w = kernel_.weight(sq);
+          double w;
+          const Eigen::Matrix2d W = weightMatrix(r, sq, &w);
           geometry::Matrix23d Jp;
           geometry::Matrix26d Jc;
           geometry::reprojectionJacobians(K_, p_c, R_[o.camera], s >= 0 ? &Jc : nullptr, &Jp);
-          const Eigen::Matrix<double, 3, 2> wJpT = w * Jp.transpose();
-          H.noalias() += wJpT * Jp;
-          g.noalias() += wJpT * r;
+          const Eigen::Matrix<double, 3, 2> JpTW = Jp.transpose() * W;
+          H.noalias() += JpTW * Jp;
+          g.noalias() += w * (Jp.transpose() * r);
           if (s >= 0) {
-            const Eigen::Matrix<double, 6, 2> wJcT = w * Jc.transpose();
+            const Eigen::Matrix<double, 6, 2> JcTW = Jc.transpose() * W;
             const int ci = slot_cam_[s];
-            Hcc_t[t][ci].noalias() += wJcT * Jc;
-            gc_t[t][ci].noalias() += wJcT * r;
-            Hcp_[s].noalias() = wJcT * Jp;
+            Hcc_t[t][ci].noalias() += JcTW * Jc;
+            gc_t[t][ci].noalias() += w * (Jc.transpose() * r);
+            Hcp_[s].noalias() = JcTW * Jp;
           }
         }
         Hpp_[j] = H;
@@ -252,13 +256,21 @@ class SubspaceGn {
       const Eigen::Vector2d r = o.uv - K_.project(p_c);
       const double sq = r.squaredNorm();
       cost += kernel_.rho(sq);
-      const double w = kernel_.weight(sq);
+      double w;
+      const Eigen::Matrix2d W = weightMatrix(r, sq, &w);
       geometry::Matrix26d Jc;
       geometry::reprojectionJacobians(K_, p_c, R_[o.camera], &Jc, nullptr);
-      Hcc_[ci].noalias() += w * Jc.transpose() * Jc;
-      gc_[ci].noalias() += w * Jc.transpose() * r;
+      Hcc_[ci].noalias() += Jc.transpose() * W * Jc;
+      gc_[ci].noalias() += w * (Jc.transpose() * r);
     }
     return cost;
+  }
+
+  // IRLS weight matrix of one residual (Hessian block J^T W J, gradient w J^T r, w = rho').
+  // (The exact second-order term of Geman-McClure, rho'' < 0, is dropped as Ceres does.)
+  Eigen::Matrix2d weightMatrix(const Eigen::Vector2d&, double sq, double* w) const {
+    *w = kernel_.weight(sq);
+    return *w * Eigen::Matrix2d::Identity();
   }
 
   // Computes dc_, dp_ for the damping lambda from the current linearization.
@@ -294,6 +306,11 @@ class SubspaceGn {
       solvers[i].compute(S_[i]);
       dc_[i].setZero();
     }
+    if (O_.use_schur && O_.camera_solver == BaOptions::CameraSolver::kConjugateGradient && ncf > 1) {
+      conjugateGradientCameras(solvers, coupling);
+      pointUpdates();
+      return;
+    }
     const int passes = (ncf <= 1 && O_.use_schur) ? 1 : O_.camera_iterations;
     for (int pass = 0; pass < passes && ncf > 0; ++pass) {
       double max_change = 0.0, max_update = 0.0;
@@ -327,6 +344,68 @@ class SubspaceGn {
       if (max_change <= O_.camera_gs_tolerance * max_update) break;
     }
     pointUpdates();
+  }
+
+  // The camera blocks of Eq. 11 (points eliminated) solved jointly by conjugate gradients
+  // preconditioned with the inverse 6x6 diagonal blocks S_ii: the reduced camera matrix is only
+  // applied through the 6x3 couplings, never formed. Leaves dc_ and q_ = sum_i H_pc dc_i.
+  void conjugateGradientCameras(const std::vector<Eigen::LDLT<Matrix6d>>& solvers,
+                                const std::vector<Matrix6d>& coupling) {
+    const int ncf = freeCameras();
+    // v -> S v with S = blockdiag(H_cc,d) - H_cp H_pp^-1 H_pc; u_j = sum_i H_pc,ij v_i.
+    auto apply = [&](const std::vector<Vector6d>& v, std::vector<Vector6d>* out) {
+      parallelFor(freePoints(), O_.threads, [&](int begin, int end, int) {
+        for (int j = begin; j < end; ++j) {
+          q_[j].setZero();
+          for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
+            q_[j].noalias() += Hcp_[s].transpose() * v[slot_cam_[s]];
+        }
+      });
+      for (int i = 0; i < ncf; ++i) {
+        Vector6d o = (S_[i] + coupling[i]) * v[i];
+        for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
+          const int s = cam_slots_[a];
+          o.noalias() -= Y_[s] * q_[slot_point_[s]];
+        }
+        (*out)[i] = o;
+      }
+    };
+    auto dot = [&](const std::vector<Vector6d>& a, const std::vector<Vector6d>& b) {
+      double d = 0.0;
+      for (int i = 0; i < ncf; ++i) d += a[i].dot(b[i]);
+      return d;
+    };
+    std::vector<Vector6d> r = b_, z(ncf), p(ncf), Ap(ncf);
+    for (int i = 0; i < ncf; ++i) {
+      dc_[i].setZero();
+      z[i] = solvers[i].solve(r[i]);
+    }
+    p = z;
+    double rz = dot(r, z);
+    const double b_norm = std::sqrt(dot(b_, b_));
+    for (int it = 0; it < O_.camera_iterations && rz > 0.0; ++it) {
+      apply(p, &Ap);
+      const double pAp = dot(p, Ap);
+      if (!(pAp > 0.0)) break;
+      const double alpha = rz / pAp;
+      for (int i = 0; i < ncf; ++i) {
+        dc_[i].noalias() += alpha * p[i];
+        r[i].noalias() -= alpha * Ap[i];
+      }
+      if (std::sqrt(dot(r, r)) <= O_.camera_gs_tolerance * b_norm) break;
+      for (int i = 0; i < ncf; ++i) z[i] = solvers[i].solve(r[i]);
+      const double rz_new = dot(r, z);
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (int i = 0; i < ncf; ++i) p[i] = z[i] + beta * p[i];
+    }
+    parallelFor(freePoints(), O_.threads, [&](int begin, int end, int) {
+      for (int j = begin; j < end; ++j) {
+        q_[j].setZero();
+        for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
+          q_[j].noalias() += Hcp_[s].transpose() * dc_[slot_cam_[s]];
+      }
+    });
   }
 
   // Eq. 12: dp_j = -H_pp^-1 (g_p + sum_i H_pc dc_i), independent per point.

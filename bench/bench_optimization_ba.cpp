@@ -1,0 +1,415 @@
+// Subspace Gauss-Newton BA vs Ceres (Levenberg-Marquardt, SPARSE_SCHUR / DENSE_SCHUR) on
+// synthetic problems: batch (10 cameras, perturbed start) and incremental per-frame
+// re-optimization in a sliding 10-camera window. Both solvers get the same problem, the same
+// Geman-McClure loss, analytic Jacobians (the same formulas) and the same relative cost
+// tolerance; costs are reported with baCost (sum of rho in px^2).
+//   bench_optimization_ba [--quick] [--threads N] [--free-cams K] [--frames F]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "vitamin_e/geometry/lie.h"
+#include "vitamin_e/geometry/projection.h"
+#include "vitamin_e/geometry/triangulation.h"
+#include "vitamin_e/optimization/ba_synthetic.h"
+#include "vitamin_e/optimization/ba_window.h"
+#include "vitamin_e/optimization/subspace_gn.h"
+
+#ifdef VITAMIN_E_WITH_CERES
+#include <ceres/ceres.h>
+#endif
+
+using namespace vitamin_e;
+using namespace vitamin_e::optimization;
+
+namespace {
+
+double nowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+#ifdef VITAMIN_E_WITH_CERES
+// T_w_c as [t(3), q(4: x y z w)], tangent = right se(3) perturbation (rho, phi) as in lie.h.
+// The cost returns the tangent Jacobian in the first 6 columns and PlusJacobian = [I6; 0].
+class Se3RightManifold : public ceres::Manifold {
+ public:
+  int AmbientSize() const override { return 7; }
+  int TangentSize() const override { return 6; }
+  bool Plus(const double* x, const double* delta, double* x_plus) const override {
+    const Eigen::Isometry3d T = fromParams(x) * geometry::expSE3(Eigen::Map<const geometry::Vector6d>(delta));
+    toParams(T, x_plus);
+    return true;
+  }
+  bool PlusJacobian(const double*, double* J) const override {
+    Eigen::Map<Eigen::Matrix<double, 7, 6, Eigen::RowMajor>> M(J);
+    M.setZero();
+    M.topRows<6>().setIdentity();
+    return true;
+  }
+  bool Minus(const double* y, const double* x, double* d) const override {
+    Eigen::Map<geometry::Vector6d> out(d);
+    out = geometry::logSE3(fromParams(x).inverse() * fromParams(y));
+    return true;
+  }
+  bool MinusJacobian(const double*, double* J) const override {
+    Eigen::Map<Eigen::Matrix<double, 6, 7, Eigen::RowMajor>> M(J);
+    M.setZero();
+    M.leftCols<6>().setIdentity();
+    return true;
+  }
+  static Eigen::Isometry3d fromParams(const double* x) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(x[0], x[1], x[2]);
+    T.linear() = Eigen::Quaterniond(x[6], x[3], x[4], x[5]).normalized().toRotationMatrix();
+    return T;
+  }
+  static void toParams(const Eigen::Isometry3d& T, double* x) {
+    const Eigen::Quaterniond q(T.linear());
+    x[0] = T.translation().x(); x[1] = T.translation().y(); x[2] = T.translation().z();
+    x[3] = q.x(); x[4] = q.y(); x[5] = q.z(); x[6] = q.w();
+  }
+};
+
+class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
+ public:
+  ReprojectionCost(const geometry::Pinhole& K, const Eigen::Vector2d& uv) : K_(K), uv_(uv) {}
+  bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
+    const Eigen::Isometry3d T_w_c = Se3RightManifold::fromParams(params[0]);
+    const Eigen::Vector3d p_w(params[1][0], params[1][1], params[1][2]);
+    const Eigen::Vector3d p_c = T_w_c.linear().transpose() * (p_w - T_w_c.translation());
+    if (p_c.z() <= 1e-9) return false;
+    Eigen::Map<Eigen::Vector2d> res(residuals);
+    res = uv_ - K_.project(p_c);
+    if (jacobians) {
+      geometry::Matrix26d Jc;
+      geometry::Matrix23d Jp;
+      geometry::reprojectionJacobians(K_, p_c, T_w_c.linear(), &Jc, &Jp);
+      if (jacobians[0]) {
+        Eigen::Map<Eigen::Matrix<double, 2, 7, Eigen::RowMajor>> J(jacobians[0]);
+        J.leftCols<6>() = Jc;
+        J.col(6).setZero();
+      }
+      if (jacobians[1]) {
+        Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> J(jacobians[1]);
+        J = Jp;
+      }
+    }
+    return true;
+  }
+
+ private:
+  geometry::Pinhole K_;
+  Eigen::Vector2d uv_;
+};
+
+// rho(s) = sigma^2 s / (sigma^2 + s): the same Geman-McClure as baCost (Ceres adds the 1/2).
+class GemanMcClureLoss : public ceres::LossFunction {
+ public:
+  explicit GemanMcClureLoss(double sigma) : k_(sigma) {}
+  void Evaluate(double s, double rho[3]) const override {
+    rho[0] = k_.rho(s);
+    rho[1] = k_.weight(s);
+    rho[2] = k_.second(s);
+  }
+
+ private:
+  geometry::GemanMcClure k_;
+};
+
+// Solves `problem` in place with Ceres; returns wall time (problem construction + Solve).
+double solveCeres(BaProblem& problem, double sigma, double tolerance, bool sparse, int threads, int* iterations) {
+  const double t0 = nowMs();
+  std::vector<double> cams(7 * problem.cameras.size()), pts(3 * problem.points.size());
+  for (size_t c = 0; c < problem.cameras.size(); ++c) Se3RightManifold::toParams(problem.cameras[c].T_w_c, &cams[7 * c]);
+  for (size_t p = 0; p < problem.points.size(); ++p) {
+    Eigen::Map<Eigen::Vector3d> m(&pts[3 * p]);
+    m = problem.points[p].p_w;
+  }
+  ceres::Problem::Options popt;
+  popt.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem cp(popt);
+  GemanMcClureLoss loss(sigma);
+  auto* manifold = new Se3RightManifold();
+  geometry::Pinhole K{problem.fx, problem.fy, problem.cx, problem.cy};
+  std::vector<bool> cam_added(problem.cameras.size(), false);
+  for (const BaObservation& o : problem.observations) {
+    if (problem.cameras[o.camera].fixed && problem.points[o.point].fixed) continue;  // constant term
+    cp.AddResidualBlock(new ReprojectionCost(K, o.uv), &loss, &cams[7 * o.camera], &pts[3 * o.point]);
+    if (!cam_added[o.camera]) {
+      cam_added[o.camera] = true;
+      cp.SetManifold(&cams[7 * o.camera], manifold);
+      if (problem.cameras[o.camera].fixed) cp.SetParameterBlockConstant(&cams[7 * o.camera]);
+    }
+    if (problem.points[o.point].fixed) cp.SetParameterBlockConstant(&pts[3 * o.point]);
+  }
+  if (!std::any_of(cam_added.begin(), cam_added.end(), [](bool b) { return b; })) delete manifold;
+  ceres::Solver::Options opt;
+  opt.minimizer_type = ceres::TRUST_REGION;
+  opt.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  opt.linear_solver_type = sparse ? ceres::SPARSE_SCHUR : ceres::DENSE_SCHUR;
+  opt.function_tolerance = tolerance;
+  opt.max_num_iterations = 50;
+  opt.num_threads = threads;
+  opt.logging_type = ceres::SILENT;
+  ceres::Solver::Summary sum;
+  ceres::Solve(opt, &cp, &sum);
+  for (size_t c = 0; c < problem.cameras.size(); ++c)
+    problem.cameras[c].T_w_c = Se3RightManifold::fromParams(&cams[7 * c]);
+  for (size_t p = 0; p < problem.points.size(); ++p) problem.points[p].p_w = Eigen::Map<Eigen::Vector3d>(&pts[3 * p]);
+  *iterations = static_cast<int>(sum.iterations.size());
+  return nowMs() - t0;
+}
+#endif
+
+struct Args {
+  bool quick = false;
+  int threads = 1;
+  int free_cams = 3;
+  int frames = 5;
+};
+
+std::vector<bool> freeMask(const BaProblem& p) {
+  std::vector<bool> m(p.cameras.size());
+  for (size_t c = 0; c < m.size(); ++c) m[c] = !p.cameras[c].fixed;
+  return m;
+}
+
+struct Result {
+  double ms = 0, cost = 0, err = 0;
+  int iters = 0;
+};
+
+struct Row {
+  int cams = 0, points = 0, obs = 0, frames = 0;
+  Result sgn, ceres_sparse, ceres_dense;
+  double init_cost = 0, init_err = 0;
+  const Result& ceres() const { return ceres_dense.ms < ceres_sparse.ms ? ceres_dense : ceres_sparse; }
+};
+
+// Runs both solvers on copies of `start`; accumulates into row (cam error over free cameras).
+void solveBoth(const BaProblem& start, const BaProblem& truth, const Args& a, Row* row, BaProblem* sgn_out) {
+  const std::vector<bool> mask = freeMask(start);
+  BaOptions o;
+  o.threads = a.threads;
+  o.tolerance = 1e-6;
+  BaProblem sgn = start;
+  double t0 = nowMs();
+  const BaSummary sum = solveSubspaceGaussNewton(sgn, o);
+  row->sgn.ms += nowMs() - t0;
+  row->sgn.iters += sum.sweeps;
+  row->sgn.cost += baCost(sgn, o.robust_sigma_px);
+  row->sgn.err += cameraPositionRmse(sgn, truth, mask);
+  row->init_cost += baCost(start, o.robust_sigma_px);
+  row->init_err += cameraPositionRmse(start, truth, mask);
+#ifdef VITAMIN_E_WITH_CERES
+  for (int dense = 0; dense < 2; ++dense) {
+    BaProblem c = start;
+    int it = 0;
+    Result& r = dense ? row->ceres_dense : row->ceres_sparse;
+    r.ms += solveCeres(c, o.robust_sigma_px, o.tolerance, !dense, a.threads, &it);
+    r.iters += it;
+    r.cost += baCost(c, o.robust_sigma_px);
+    r.err += cameraPositionRmse(c, truth, mask);
+  }
+#endif
+  if (sgn_out) *sgn_out = sgn;
+}
+
+Row runBatch(int points, const Args& a) {
+  SyntheticBaConfig cfg;
+  cfg.num_cameras = 10;
+  cfg.num_points = points;
+  cfg.seed = 100 + points;
+  const SyntheticBa s = makeSyntheticBa(cfg);
+  BaProblem start = s.noisy;
+  start.cameras[0].fixed = start.cameras[1].fixed = true;  // gauge
+  perturbBaProblem(&start, 0.5, 0.03, 0.05, cfg.seed);
+  Row row;
+  row.cams = 10;
+  row.points = static_cast<int>(start.points.size());
+  row.obs = static_cast<int>(start.observations.size());
+  row.frames = 1;
+  solveBoth(start, s.truth, a, &row, nullptr);
+  return row;
+}
+
+// Sliding 10-camera window over a sequence; each frame adds one camera (constant-velocity
+// initial pose), the points that reach two observations (triangulated from the current
+// estimates) and the new observations, then re-optimizes with BaWindowPolicy (newest
+// free_cams cameras and their points free, the two oldest of the window fixed).
+Row runIncremental(int window_points, const Args& a) {
+  const int W = 10, F = a.frames, N = W + F;
+  SyntheticBaConfig cfg;
+  cfg.num_cameras = N;
+  cfg.num_points = static_cast<int>(window_points * (N + 5.5) / (W + 5.5));
+  cfg.seed = 7 + window_points;
+  const SyntheticBa s = makeSyntheticBa(cfg);
+  const BaProblem& obs_src = s.noisy;
+  std::vector<Eigen::Isometry3d> est_T(N);
+  std::vector<Eigen::Vector3d> est_p(obs_src.points.size());
+  std::vector<bool> has_p(obs_src.points.size(), false);
+  std::vector<std::vector<int>> obs_of_point(obs_src.points.size());
+  for (size_t k = 0; k < obs_src.observations.size(); ++k) obs_of_point[obs_src.observations[k].point].push_back(k);
+
+  // Builds the window problem [first, last]; new points are triangulated from est_T.
+  auto build = [&](int first, int last, BaProblem* prob, BaProblem* truth, std::vector<int>* pt_ids) {
+    *prob = BaProblem();
+    prob->fx = obs_src.fx; prob->fy = obs_src.fy; prob->cx = obs_src.cx; prob->cy = obs_src.cy;
+    *truth = *prob;
+    for (int c = first; c <= last; ++c) {
+      prob->cameras.push_back({est_T[c], false});
+      truth->cameras.push_back({s.truth.cameras[c].T_w_c, false});
+    }
+    pt_ids->clear();
+    for (size_t p = 0; p < obs_of_point.size(); ++p) {
+      std::vector<int> in;
+      for (int k : obs_of_point[p]) {
+        const int c = obs_src.observations[k].camera;
+        if (c >= first && c <= last) in.push_back(k);
+      }
+      if (in.size() < 2) continue;
+      if (!has_p[p]) {
+        std::vector<Eigen::Isometry3d> Ts;
+        std::vector<Eigen::Vector2d> xy;
+        for (int k : in) {
+          const BaObservation& o = obs_src.observations[k];
+          Ts.push_back(est_T[o.camera]);
+          xy.emplace_back((o.uv.x() - obs_src.cx) / obs_src.fx, (o.uv.y() - obs_src.cy) / obs_src.fy);
+        }
+        geometry::TriangulationConfig tc;
+        tc.focal_px = obs_src.fx;
+        tc.min_parallax_deg = 0.3;
+        tc.max_reproj_error_px = 5.0;
+        const geometry::TriangulationResult tr = geometry::triangulatePoint(Ts, xy, tc);
+        if (!tr.ok) continue;
+        est_p[p] = tr.p_w;
+        has_p[p] = true;
+      }
+      const int id = static_cast<int>(prob->points.size());
+      pt_ids->push_back(static_cast<int>(p));
+      prob->points.push_back({est_p[p], false});
+      truth->points.push_back({s.truth.points[p].p_w, false});
+      for (int k : in) {
+        const BaObservation& o = obs_src.observations[k];
+        prob->observations.push_back({o.camera - first, id, o.uv});
+        truth->observations.push_back(prob->observations.back());
+      }
+    }
+  };
+  auto store = [&](const BaProblem& prob, int first, const std::vector<int>& pt_ids) {
+    for (size_t c = 0; c < prob.cameras.size(); ++c) est_T[first + c] = prob.cameras[c].T_w_c;
+    for (size_t j = 0; j < pt_ids.size(); ++j) est_p[pt_ids[j]] = prob.points[j].p_w;
+  };
+
+  // The initial window, converged from the ground truth (two oldest fixed).
+  for (int c = 0; c < W; ++c) est_T[c] = s.truth.cameras[c].T_w_c;
+  for (size_t p = 0; p < est_p.size(); ++p) {
+    est_p[p] = s.truth.points[p].p_w;
+    has_p[p] = s.first_camera[p] < W;
+  }
+  BaProblem prob, truth;
+  std::vector<int> pt_ids;
+  build(0, W - 1, &prob, &truth, &pt_ids);
+  prob.cameras[0].fixed = prob.cameras[1].fixed = true;
+  BaOptions tight;
+  tight.tolerance = 1e-10;
+  tight.max_sweeps = 50;
+  solveSubspaceGaussNewton(prob, tight);
+  store(prob, 0, pt_ids);
+
+  Row row;
+  row.cams = W;
+  BaWindowPolicy policy;
+  policy.num_free_cameras = a.free_cams;
+  for (int f = 0; f < F; ++f) {
+    const int n = W + f, first = n - W + 1;
+    est_T[n] = est_T[n - 1] * (est_T[n - 2].inverse() * est_T[n - 1]);  // constant velocity
+    build(first, n, &prob, &truth, &pt_ids);
+    applyBaWindow(selectBaWindow(prob, policy), &prob);
+    row.points += static_cast<int>(prob.points.size());
+    row.obs += static_cast<int>(prob.observations.size());
+    BaProblem out;
+    solveBoth(prob, truth, a, &row, &out);
+    store(out, first, pt_ids);
+  }
+  row.frames = F;
+  for (Result* r : {&row.sgn, &row.ceres_sparse, &row.ceres_dense}) {
+    r->ms /= F; r->cost /= F; r->err /= F;
+  }
+  row.points /= F;
+  row.obs /= F;
+  row.init_cost /= F;
+  row.init_err /= F;
+  return row;
+}
+
+void printRow(const char* kind, const Row& r) {
+  const Result& c = r.ceres();
+  std::printf("%-6s %4d %6d %7d | %9.1f %5.1f %12.2f %9.2e | %9.1f %9.1f %4.1f %12.2f %9.2e | %6.2fx %8.5f\n", kind,
+              r.cams, r.points, r.obs, r.sgn.ms, double(r.sgn.iters) / r.frames, r.sgn.cost, r.sgn.err,
+              r.ceres_sparse.ms, r.ceres_dense.ms, double(c.iters) / r.frames, c.cost, c.err, c.ms / r.sgn.ms,
+              r.sgn.cost / c.cost - 1.0);
+}
+
+std::string jsonRow(const Row& r, bool batch) {
+  const Result& c = r.ceres();
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "{%s\"points\":%d,\"sgn_ms\":%.3f,\"ceres_ms\":%.3f,\"sgn_cost\":%.6f,\"ceres_cost\":%.6f,"
+                "\"sgn_cam_err\":%.3e,\"ceres_cam_err\":%.3e,\"ceres_sparse_ms\":%.3f,\"ceres_dense_ms\":%.3f}",
+                batch ? ("\"cams\":" + std::to_string(r.cams) + ",").c_str() : "", r.points, r.sgn.ms, c.ms,
+                r.sgn.cost, c.cost, r.sgn.err, c.err, r.ceres_sparse.ms, r.ceres_dense.ms);
+  return buf;
+}
+
+int runAll(const Args& a) {
+#ifndef VITAMIN_E_WITH_CERES
+  std::fprintf(stderr, "warning: built without Ceres; Ceres columns are zero\n");
+#endif
+  const std::vector<int> batch_sizes = a.quick ? std::vector<int>{1000} : std::vector<int>{1000, 5000, 20000, 50000};
+  const std::vector<int> inc_sizes = a.quick ? std::vector<int>{5000} : std::vector<int>{5000, 20000};
+  std::printf("# threads=%d, incremental: free newest %d cameras of a 10-camera window, %d frames\n", a.threads,
+              a.free_cams, a.frames);
+  std::printf("%-6s %4s %6s %7s | %9s %5s %12s %9s | %9s %9s %4s %12s %9s | %7s %8s\n", "kind", "cams", "points",
+              "obs", "sgn_ms", "sweep", "sgn_cost", "sgn_err", "csparse", "cdense", "it", "ceres_cost", "ceres_err",
+              "speedup", "cost_rel");
+  std::string jb, ji;
+  for (int n : batch_sizes) {
+    const Row r = runBatch(n, a);
+    printRow("batch", r);
+    jb += (jb.empty() ? "" : ",") + jsonRow(r, true);
+    std::fflush(stdout);
+  }
+  double ms_per_frame = 0.0;
+  for (int n : inc_sizes) {
+    const Row r = runIncremental(n, a);
+    printRow("incr", r);
+    ji += (ji.empty() ? "" : ",") + jsonRow(r, false);
+    if (n == inc_sizes.front()) ms_per_frame = r.sgn.ms;
+    std::fflush(stdout);
+  }
+  std::printf("{\"batch\":[%s],\"incremental\":[%s],\"incremental_ms_per_frame\":%.3f}\n", jb.c_str(), ji.c_str(),
+              ms_per_frame);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--quick")) a.quick = true;
+    else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) a.threads = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--free-cams") && i + 1 < argc) a.free_cams = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) a.frames = std::atoi(argv[++i]);
+    else {
+      std::fprintf(stderr, "usage: %s [--quick] [--threads N] [--free-cams K] [--frames F]\n", argv[0]);
+      return 2;
+    }
+  }
+  return runAll(a);
+}
