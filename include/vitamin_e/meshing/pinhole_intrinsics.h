@@ -24,4 +24,18 @@ struct PinholeIntrinsics {
   }
 };
 
+// From any camera exposing width() height() fx() fy() cx() cy() (e.g.
+// camera::Camera: its pinhole pixels are K * normalized undistorted coordinates).
+template <typename CameraT>
+PinholeIntrinsics pinholeIntrinsicsOf(const CameraT& camera) {
+  PinholeIntrinsics K;
+  K.fx = camera.fx();
+  K.fy = camera.fy();
+  K.cx = camera.cx();
+  K.cy = camera.cy();
+  K.width = camera.width();
+  K.height = camera.height();
+  return K;
+}
+
 }  // namespace vitamin_e::meshing
