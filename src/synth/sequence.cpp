@@ -157,7 +157,7 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
   const CameraPathConfig& pc = path.config();
   std::ostringstream js;
   js.precision(12);
-  js << "{\"generator\": \"vitamin_e_make_sequence\", \"seed\": " << config.seed << ", \"n_frames\": " << config.frames
+  js << "{\"generator\": \"vitamin_e_make_sequence\", \"n_frames\": " << config.frames
      << ", \"rate_hz\": " << config.rate_hz << ", \"first_frame_ns\": " << frameTimestampNs(config, 0)
      << ", \"last_frame_ns\": " << frameTimestampNs(config, config.frames - 1) << ",\n \"camera\": {\"width\": "
      << cam.width() << ", \"height\": " << cam.height() << ", \"K\": [" << cam.fx() << ", " << cam.fy() << ", "
@@ -169,7 +169,10 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
      << pc.radius_y << ", \"height_amp\": " << pc.height_amp << ", \"speed_m_s\": " << pc.speed
      << ", \"heading0\": " << pc.heading0 << ", \"heading_rate\": " << pc.heading_rate << "},\n \"render\": {\"supersample\": "
      << config.supersample << ", \"mip_filtering\": true, \"noise_sigma\": " << config.noise_sigma
-     << "},\n \"scene\": " << scene.toJson() << "}\n";
+     << "},\n";
+  // The scene's fields (seed, room, boxes, faces) at the top level, as in the shared renderer's scene.json.
+  const std::string scene_json = scene.toJson();
+  js << " " << scene_json.substr(1, scene_json.size() - 2) << "}\n";
   openOut(out / "scene.json") << js.str();
 
   stats.frames = config.frames;

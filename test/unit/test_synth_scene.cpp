@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+#include <yaml-cpp/yaml.h>
 #include <opencv2/imgproc.hpp>
 
 #include "vitamin_e/camera/camera.h"
@@ -215,7 +216,11 @@ TEST(SynthSequence, WritesReadableEurocFolderMatchingGroundTruth) {
   const auto gt = readLines(dir.path() / "groundtruth_cam0_tum.txt");
   ASSERT_EQ(gt.size(), 6u);
   EXPECT_EQ(readLines(dir.path() / "mav0" / "state_groundtruth_estimate0" / "data.csv").size(), 6u);
-  EXPECT_TRUE(fs::exists(dir.path() / "scene.json"));
+  // scene.json is valid JSON (YAML is a superset) with the room and boxes at the top.
+  const YAML::Node js = YAML::LoadFile((dir.path() / "scene.json").string());
+  EXPECT_EQ(js["room"]["max"].size(), 3u);
+  EXPECT_DOUBLE_EQ(js["room"]["max"][0].as<double>(), 4.0);
+  EXPECT_EQ(js["n_frames"].as<int>(), 6);
   // The calibration reads back through the camera module's EuRoC loader.
   const auto calib = vitamin_e::camera::loadEurocSensorYaml((cam_dir / "sensor.yaml").string());
   const auto cam = vs::makeSequenceCamera(320, 240, true);
@@ -242,6 +247,8 @@ TEST(SynthSequence, WritesReadableEurocFolderMatchingGroundTruth) {
   // The same scene as the writer's (deterministic from the config).
   const vs::CameraPath path(vs::makeSequencePath(cfg));
   const vs::Scene scene = vs::makeSequenceScene(cfg, path);
+  EXPECT_EQ(js["boxes"].size(), scene.boxes().size());
+  EXPECT_EQ(js["faces"].size(), scene.faces().size());
   int checked = 0;
   for (int face = 0; face < static_cast<int>(scene.faces().size()); ++face) {
     const PixelCheck c = checkFacePoints(scene, face, cam, T_w_c, img, 200);
