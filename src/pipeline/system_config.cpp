@@ -111,6 +111,8 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("pipeline", "max_reprojection_px", &c.max_reprojection_px));
   f.push_back(field("pipeline", "ba_fixed_keyframes", &c.ba_fixed_keyframes));
   f.push_back(field("pipeline", "ba_keyframe_sweeps", &c.ba_keyframe_sweeps));
+  f.push_back(field("pipeline", "ba_frame_sweeps", &c.ba_frame_sweeps));
+  f.push_back(field("pipeline", "ba_free_keyframes", &c.ba_free_keyframes));
   f.push_back(field("pipeline", "keyframe_parallax_px", &c.keyframe_parallax_px));
   f.push_back(field("pipeline", "keyframe_min_mapped_ratio", &c.keyframe_min_mapped_ratio));
   f.push_back(field("pipeline", "max_step_depth_ratio", &c.max_step_depth_ratio));
@@ -204,6 +206,8 @@ void SystemConfig::validate() const {
   check(ba_fixed_keyframes >= 1 && ba_fixed_keyframes < map.max_keyframes,
         "pipeline.ba_fixed_keyframes must be in [1, map.max_keyframes)");
   check(ba_keyframe_sweeps >= 1, "pipeline.ba_keyframe_sweeps must be >= 1");
+  check(ba_frame_sweeps >= 1, "pipeline.ba_frame_sweeps must be >= 1");
+  check(ba_free_keyframes >= 1, "pipeline.ba_free_keyframes must be >= 1");
   check(keyframe_parallax_px > 0.0, "pipeline.keyframe_parallax_px must be > 0");
   check(keyframe_min_mapped_ratio >= 0.0 && keyframe_min_mapped_ratio <= 1.0,
         "pipeline.keyframe_min_mapped_ratio must be in [0, 1]");

@@ -145,10 +145,16 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
   const auto& kfs = map.keyframes();
   // Cameras: the window's keyframes; in per-frame mode the current frame is
   // appended as the only free camera.
-  for (std::size_t k = 0; k < kfs.size(); ++k) {
+  // Keyframe BA: the newest ba_free_keyframes are free, never the oldest
+  // ba_fixed_keyframes (gauge: pose and scale); with two keyframes only the
+  // first is fixed.
+  const int num_kf = static_cast<int>(kfs.size());
+  const int first_free =
+      std::max(std::min(config.ba_fixed_keyframes, num_kf - 1), num_kf - config.ba_free_keyframes);
+  for (int k = 0; k < num_kf; ++k) {
     optimization::BaCamera c;
     c.T_w_c = kfs[k].T_w_c;
-    c.fixed = !keyframe_window || static_cast<int>(k) < config.ba_fixed_keyframes;
+    c.fixed = !keyframe_window || k < first_free;
     problem.cameras.push_back(c);
   }
   int current_cam = -1;
@@ -177,10 +183,14 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
     return Eigen::Vector2d(camera.fx() * xy.x() + camera.cx(), camera.fy() * xy.y() + camera.cy());
   };
   if (keyframe_window) {
-    for (std::size_t k = 0; k < kfs.size(); ++k) {
+    // Points seen by a free keyframe, with all their keyframe observations.
+    for (int k = first_free; k < num_kf; ++k) {
+      for (const auto& obs : kfs[k].observations) add_point(obs.first);
+    }
+    for (int k = 0; k < num_kf; ++k) {
       for (const auto& obs : kfs[k].observations) {
-        const int p = add_point(obs.first);
-        if (p >= 0) problem.observations.push_back({static_cast<int>(k), p, to_px(obs.second)});
+        auto it = point_index.find(obs.first);
+        if (it != point_index.end()) problem.observations.push_back({k, it->second, to_px(obs.second)});
       }
     }
   } else {
@@ -197,7 +207,7 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
   }
   if (problem.points.empty()) return;
   optimization::BaOptions options = config.ba;
-  if (keyframe_window) options.max_sweeps = config.ba_keyframe_sweeps;
+  options.max_sweeps = keyframe_window ? config.ba_keyframe_sweeps : config.ba_frame_sweeps;
   const optimization::BaSummary summary = optimization::solveSubspaceGaussNewton(problem, options);
 
   // Write back (only finite results).
