@@ -81,7 +81,12 @@ class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
     const Eigen::Isometry3d T_w_c = Se3RightManifold::fromParams(params[0]);
     const Eigen::Vector3d p_w(params[1][0], params[1][1], params[1][2]);
     const Eigen::Vector3d p_c = T_w_c.linear().transpose() * (p_w - T_w_c.translation());
-    if (p_c.z() <= 1e-9) return false;
+    if (p_c.z() <= 1e-9) {  // behind the camera: saturate the loss like baCost, no gradient
+      residuals[0] = residuals[1] = 1e6;
+      if (jacobians && jacobians[0]) std::fill(jacobians[0], jacobians[0] + 14, 0.0);
+      if (jacobians && jacobians[1]) std::fill(jacobians[1], jacobians[1] + 6, 0.0);
+      return true;
+    }
     Eigen::Map<Eigen::Vector2d> res(residuals);
     res = uv_ - K_.project(p_c);
     if (jacobians) {
@@ -185,7 +190,7 @@ struct Result {
 
 struct Row {
   int cams = 0, points = 0, obs = 0, frames = 0;
-  Result sgn, ceres_sparse, ceres_dense;
+  Result sgn, sgn_budget, ceres_sparse, ceres_dense;  // sgn_budget: max_sweeps = 5
   double init_cost = 0, init_err = 0;
   const Result& ceres() const { return ceres_dense.ms < ceres_sparse.ms ? ceres_dense : ceres_sparse; }
 };
@@ -203,6 +208,17 @@ void solveBoth(const BaProblem& start, const BaProblem& truth, const Args& a, Ro
   row->sgn.iters += sum.sweeps;
   row->sgn.cost += baCost(sgn, o.robust_sigma_px);
   row->sgn.err += cameraPositionRmse(sgn, truth, mask);
+  {
+    BaProblem b = start;
+    BaOptions ob = o;
+    ob.max_sweeps = 5;
+    t0 = nowMs();
+    const BaSummary sb = solveSubspaceGaussNewton(b, ob);
+    row->sgn_budget.ms += nowMs() - t0;
+    row->sgn_budget.iters += sb.sweeps;
+    row->sgn_budget.cost += baCost(b, o.robust_sigma_px);
+    row->sgn_budget.err += cameraPositionRmse(b, truth, mask);
+  }
   row->init_cost += baCost(start, o.robust_sigma_px);
   row->init_err += cameraPositionRmse(start, truth, mask);
 #ifdef VITAMIN_E_WITH_CERES
@@ -337,7 +353,7 @@ Row runIncremental(int window_points, const Args& a) {
     store(out, first, pt_ids);
   }
   row.frames = F;
-  for (Result* r : {&row.sgn, &row.ceres_sparse, &row.ceres_dense}) {
+  for (Result* r : {&row.sgn, &row.sgn_budget, &row.ceres_sparse, &row.ceres_dense}) {
     r->ms /= F; r->cost /= F; r->err /= F;
   }
   row.points /= F;
@@ -349,6 +365,9 @@ Row runIncremental(int window_points, const Args& a) {
 
 void printRow(const char* kind, const Row& r) {
   const Result& c = r.ceres();
+  std::printf("%-6s %4d %6d %7d | %9.1f %5.1f %12.2f %9.2e |  (subspace GN, max 5 sweeps)           | %6.2fx %8.5f\n",
+              "  sgn5", r.cams, r.points, r.obs, r.sgn_budget.ms, double(r.sgn_budget.iters) / r.frames,
+              r.sgn_budget.cost, r.sgn_budget.err, c.ms / r.sgn_budget.ms, r.sgn_budget.cost / c.cost - 1.0);
   std::printf("%-6s %4d %6d %7d | %9.1f %5.1f %12.2f %9.2e | %9.1f %9.1f %4.1f %12.2f %9.2e | %6.2fx %8.5f\n", kind,
               r.cams, r.points, r.obs, r.sgn.ms, double(r.sgn.iters) / r.frames, r.sgn.cost, r.sgn.err,
               r.ceres_sparse.ms, r.ceres_dense.ms, double(c.iters) / r.frames, c.cost, c.err, c.ms / r.sgn.ms,
@@ -357,12 +376,14 @@ void printRow(const char* kind, const Row& r) {
 
 std::string jsonRow(const Row& r, bool batch) {
   const Result& c = r.ceres();
-  char buf[512];
+  char buf[1024];
   std::snprintf(buf, sizeof(buf),
                 "{%s\"points\":%d,\"sgn_ms\":%.3f,\"ceres_ms\":%.3f,\"sgn_cost\":%.6f,\"ceres_cost\":%.6f,"
-                "\"sgn_cam_err\":%.3e,\"ceres_cam_err\":%.3e,\"ceres_sparse_ms\":%.3f,\"ceres_dense_ms\":%.3f}",
+                "\"sgn_cam_err\":%.3e,\"ceres_cam_err\":%.3e,\"ceres_sparse_ms\":%.3f,\"ceres_dense_ms\":%.3f,"
+                "\"sgn5_ms\":%.3f,\"sgn5_cost\":%.6f,\"sgn5_cam_err\":%.3e,\"init_cost\":%.6f,\"sgn_sweeps\":%.1f}",
                 batch ? ("\"cams\":" + std::to_string(r.cams) + ",").c_str() : "", r.points, r.sgn.ms, c.ms,
-                r.sgn.cost, c.cost, r.sgn.err, c.err, r.ceres_sparse.ms, r.ceres_dense.ms);
+                r.sgn.cost, c.cost, r.sgn.err, c.err, r.ceres_sparse.ms, r.ceres_dense.ms, r.sgn_budget.ms,
+                r.sgn_budget.cost, r.sgn_budget.err, r.init_cost, double(r.sgn.iters) / r.frames);
   return buf;
 }
 
