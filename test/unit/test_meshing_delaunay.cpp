@@ -6,6 +6,7 @@
 #include <map>
 #include <random>
 
+#include "vitamin_e/camera/camera.h"
 #include "vitamin_e/meshing/delaunay.h"
 #include "vitamin_e/meshing/frame_mesher.h"
 
@@ -160,6 +161,18 @@ TEST(FrameMesher, DropsStepLongAndObliqueTriangles) {
   EXPECT_THROW(mesher.build({1}, {}, {}, K), std::invalid_argument);
   cfg.max_edge_px = -1.0;
   EXPECT_THROW(FrameMesher{cfg}, std::invalid_argument);
+}
+
+TEST(PinholeIntrinsics, FromCameraAndValidation) {
+  const vitamin_e::camera::Camera cam(752, 480, 458.6, 457.3, 367.2, 248.4);
+  const PinholeIntrinsics K = pinholeIntrinsicsOf(cam);
+  EXPECT_EQ(K.width, 752);
+  EXPECT_DOUBLE_EQ(K.cy, 248.4);
+  const Eigen::Vector3d p(0.3, -0.2, 2.0);
+  EXPECT_TRUE(K.backProject(K.project(p), 2.0).isApprox(p, 1e-12));
+  PinholeIntrinsics bad = K;
+  bad.fx = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
 int main(int argc, char** argv) {
