@@ -4,7 +4,7 @@
 # evaluates the trajectory (Sim(3) ATE, plot) and prints the timing per stage.
 #   ./scripts/demo.sh [--frames N] [--seed S] [--fresh]
 # Outputs in demo_output/: sequence/ (EuRoC layout), run/ (trajectory.txt,
-# stats.json, points.ply), trajectory.png, evaluation.txt.
+# stats.json, points.ply), trajectory.png, evaluation.txt. VE_NO_BUILD=1 skips the build.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -29,8 +29,13 @@ run="$out/run"
 bin_dir="$VE_WS/devel/lib/vitamin_e"
 py=/usr/bin/python3
 
-ve_info "1/4 building (./scripts/build.sh)"
-"$VE_ROOT/scripts/build.sh"
+if [ "${VE_NO_BUILD:-0}" != 1 ]; then
+  ve_info "1/4 building (./scripts/build.sh)"
+  "$VE_ROOT/scripts/build.sh" || ve_die "the build failed (see above)"
+fi
+for b in vitamin_e_make_sequence vitamin_e_evaluate; do
+  [ -x "$bin_dir/$b" ] || ve_die "$bin_dir/$b is missing: build first (./scripts/build.sh)"
+done
 
 # 2. The sequence: reuse it if complete and made with the same settings.
 settings="frames=$frames seed=$seed rate=20 size=752x480 distortion=euroc"
