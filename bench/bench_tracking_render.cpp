@@ -376,11 +376,13 @@ int main(int argc, char** argv) {
   std::printf("render %s, %zu frames, 752x480, tracker threads=%d\n", dir.c_str(), frames.size(), cfg.threads);
   std::printf("%-34s %14s %14s\n", "", "curv.extrema", "OpenCV KLT");
   std::printf("%-34s %14.0f %14.0f\n", "points/frame median", median(ours.points), median(klt.points));
-  std::printf("%-34s %14.0f %14s\n", "tracked/frame median (min)", median(tracked_pf), "");
+  std::printf("%-34s %14.0f %14s\n", "tracked/frame median", median(tracked_pf), "");
   std::printf("%-34s %14d %14s\n", "tracked/frame min", min_tracked, "");
   std::printf("%-34s %14.2f %14.2f\n", "ms/frame median", median(ours.ms), median(klt.ms));
   std::printf("%-34s %14.2f %14.2f\n", "ms/frame p95", pct(ours.ms, 95), pct(klt.ms, 95));
-  std::printf("%-34s %14.2f %14.2f\n", "CPU ms/frame median (all threads)", median(ours.cpu), median(klt.cpu));
+  std::printf("%-34s %14.2f %14.2f\n", "CPU ms/frame median (all threads)", median(ours.cpu), median(klt.cpu),
+              ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
+              klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
   std::printf("%-34s %14.0f %14.0f\n", "track length median [frames]", median(ours.lengths), median(klt.lengths));
   std::printf("%-34s %14.4f %14.4f\n", "track steps within 1 px", our_ratio, klt_ratio);
   std::printf("%-34s %14ld %14ld\n", "track steps checked", ours.checked, klt.checked);
@@ -397,8 +399,11 @@ int main(int argc, char** argv) {
   }
   std::printf("{\"points_per_frame_median\":%.0f,\"ms_per_frame_median\":%.3f,\"ms_per_frame_p95\":%.3f,"
               "\"track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
-              "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f,\"cpu_ms_per_frame_median\":%.3f,\"klt_cpu_ms_per_frame_median\":%.3f}\n",
+              "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f,\"cpu_ms_per_frame_median\":%.3f,\"klt_cpu_ms_per_frame_median\":%.3f,"
+              "\"drift10_1px_ratio\":%.4f,\"klt_drift10_1px_ratio\":%.4f}\n",
               median(ours.points), median(ours.ms), pct(ours.ms, 95), median(ours.lengths), our_ratio, min_tracked,
-              median(klt.points), median(klt.ms), klt_ratio, median(ours.cpu), median(klt.cpu));
+              median(klt.points), median(klt.ms), klt_ratio, median(ours.cpu), median(klt.cpu),
+              ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
+              klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
   return 0;
 }
