@@ -30,6 +30,8 @@ Renderer::Renderer(const Scene& scene, const camera::Camera& camera, int supersa
       }
     }
   }
+  min_ray_cos_ = 1.0;
+  for (const auto& r : rays_c_) min_ray_cos_ = std::min(min_ray_cos_, static_cast<double>(r.z()));
   // Angular size of a pixel (of a subsample when supersampling) from the
   // neighbouring centre rays: the distortion makes it vary over the image.
   pixel_angle_.resize(centre.size());
@@ -52,6 +54,7 @@ cv::Mat Renderer::renderFloat(const Eigen::Isometry3d& T_w_c, cv::Mat* depth) co
   const Eigen::Matrix3d R = T_w_c.linear();
   const Eigen::Vector3d o = T_w_c.translation();
   RayHit hit;
+  const std::vector<char> boxes = scene_.boxesInFront(o, R.col(2), min_ray_cos_);
   // 16 x 16 tiles: neighbouring pixels read neighbouring texels, so tiles keep
   // the texture reads in cache (rows sweep whole walls).
   constexpr int kTile = 16;
@@ -68,7 +71,7 @@ cv::Mat Renderer::renderFloat(const Eigen::Isometry3d& T_w_c, cv::Mat* depth) co
           for (int k = 0; k < n; ++k) {
             const Eigen::Vector3f& rc = rays_c_[pix * n + k];
             const Eigen::Vector3d d = R * rc.cast<double>();
-            if (scene_.intersect(o, d, &hit)) {
+            if (scene_.intersect(o, d, &hit, &boxes)) {
               const double footprint = hit.t * ang / std::sqrt(std::max(hit.cos_incidence, 0.05));
               sum += scene_.shade(hit, footprint);
               zsum += static_cast<float>(hit.t * rc.z());

@@ -83,6 +83,28 @@ Scene Scene::makeRoom(const SceneConfig& config, const std::vector<Eigen::Vector
 }
 
 bool Scene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, RayHit* hit) const {
+  return intersect(o, d, hit, nullptr);
+}
+
+std::vector<char> Scene::boxesInFront(const Eigen::Vector3d& o, const Eigen::Vector3d& forward, double min_cos) const {
+  // Conservative: the box's bounding sphere touches the cone.
+  const double half_angle = std::acos(std::clamp(min_cos, -1.0, 1.0));
+  const Eigen::Vector3d f = forward.normalized();
+  std::vector<char> mask(boxes_.size(), 1);
+  for (std::size_t k = 0; k < boxes_.size(); ++k) {
+    const Eigen::Vector3d c = 0.5 * (boxes_[k].min + boxes_[k].max);
+    const double r = 0.5 * (boxes_[k].max - boxes_[k].min).norm();
+    const Eigen::Vector3d v = c - o;
+    const double dist = v.norm();
+    if (dist <= r) continue;
+    const double angle = std::acos(std::clamp(f.dot(v) / dist, -1.0, 1.0));
+    if (angle - std::asin(r / dist) > half_angle + 1e-3) mask[k] = 0;
+  }
+  return mask;
+}
+
+bool Scene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, RayHit* hit,
+                      const std::vector<char>* box_mask) const {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double best = kInf;
   int best_face = -1;
@@ -100,6 +122,7 @@ bool Scene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, RayHit
   }
   // Entering a box (slab test).
   for (std::size_t k = 0; k < boxes_.size(); ++k) {
+    if (box_mask && !(*box_mask)[k]) continue;
     const AxisBox& b = boxes_[k];
     double t_near = -kInf, t_far = kInf;
     int near_axis = -1;

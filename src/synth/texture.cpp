@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <opencv2/imgproc.hpp>
 
@@ -153,17 +154,22 @@ float Texture::bilinear(int level, double x, double y) const {
 namespace {
 // log2 for mip selection: exponent plus a quadratic in the mantissa (error
 // < 0.01), monotonic and continuous, much cheaper than std::log2.
-inline float fastLog2(float v) {
-  int e = 0;
-  const float m = std::frexp(v, &e);  // v = m * 2^e, m in [0.5, 1)
-  const float x = 2.0f * m - 1.0f;    // [0, 1)
-  return static_cast<float>(e - 1) + x * (1.3466f - 0.3466f * x);
+inline float fastLog2(float v) {  // v > 0, normal
+  std::uint32_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  const int e = static_cast<int>((bits >> 23) & 0xFF) - 127;
+  bits = (bits & 0x007FFFFFu) | 0x3F800000u;  // mantissa in [1, 2)
+  float m;
+  std::memcpy(&m, &bits, sizeof(m));
+  const float x = m - 1.0f;
+  return static_cast<float>(e) + x * (1.3466f - 0.3466f * x);
 }
 }  // namespace
 
 float Texture::sample(double u_m, double v_m, double footprint_m) const {
-  const double x = u_m / texel_m_, y = v_m / texel_m_;
-  const float ratio = static_cast<float>(footprint_m / texel_m_);
+  const double inv = 1.0 / texel_m_;
+  const double x = u_m * inv, y = v_m * inv;
+  const float ratio = static_cast<float>(footprint_m * inv);
   if (ratio <= 1.0f) return bilinear(0, x, y);
   const float lod = fastLog2(ratio);
   const int max_level = numLevels() - 1;

@@ -164,6 +164,35 @@ TEST(SynthScene, RoomGeometryAndBoxesClearOfThePath) {
   EXPECT_NEAR(len / 20.0, cfg.speed, 0.03);
 }
 
+TEST(SynthScene, RenderedDepthMatchesUnculledRayCasting) {
+  // The renderer skips boxes outside the view cone; its depth must equal plain
+  // ray casting against everything, from many poses along the path.
+  vs::SequenceConfig cfg;
+  cfg.seed = 4;
+  cfg.num_boxes = 12;
+  const vs::CameraPath path(vs::makeSequencePath(cfg));
+  const vs::Scene scene = vs::makeSequenceScene(cfg, path);
+  const auto cam = vs::makeSequenceCamera(160, 120, true);
+  const vs::Renderer renderer(scene, cam, 1);
+  int box_pixels = 0;
+  for (double t = 0.0; t < 30.0; t += 1.5) {
+    const Eigen::Isometry3d T_w_c = path.T_w_c(t);
+    cv::Mat depth;
+    renderer.renderFloat(T_w_c, &depth);
+    for (int v = 0; v < 120; v += 3) {
+      for (int u = 0; u < 160; u += 3) {
+        Eigen::Vector3d b;
+        ASSERT_TRUE(cam.unproject(Eigen::Vector2d(u, v), &b));
+        vs::RayHit hit;
+        ASSERT_TRUE(scene.intersect(T_w_c.translation(), T_w_c.linear() * b.normalized(), &hit));
+        ASSERT_NEAR(depth.at<float>(v, u), hit.t * b.normalized().z(), 1e-3) << "t " << t << " pixel " << u << "," << v;
+        if (hit.face >= 6) ++box_pixels;
+      }
+    }
+  }
+  EXPECT_GT(box_pixels, 100);  // boxes were in view
+}
+
 TEST(SynthScene, TextureIsRichAndNotRepetitive) {
   const cv::Mat tex = vs::generateProceduralTexture(800, 600, 0.005, 11);
   cv::Scalar mean, sd;

@@ -40,6 +40,7 @@ class Renderer {
   int ss_ = 1;
   std::vector<Eigen::Vector3f> rays_c_;   // per subsample, row-major pixels then s*s samples; unit bearings
   std::vector<float> pixel_angle_;        // per pixel: angular size [rad] (of one subsample)
+  double min_ray_cos_ = 1.0;              // widest ray's angle to the optical axis (cosine)
 };
 
 }  // namespace vitamin_e::synth

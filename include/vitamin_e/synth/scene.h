@@ -56,6 +56,12 @@ class Scene {
 
   // First surface hit by origin + t * dir (dir unit length), t > 1e-9.
   bool intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, RayHit* hit) const;
+  // Same, testing only the boxes with box_mask[k] != 0 (null: all).
+  bool intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, RayHit* hit,
+                 const std::vector<char>* box_mask) const;
+  // Boxes possibly seen within the cone of half-angle acos(min_cos) around
+  // forward (conservative: the box's bounding sphere touches the cone).
+  std::vector<char> boxesInFront(const Eigen::Vector3d& origin, const Eigen::Vector3d& forward, double min_cos) const;
   // Intensity in [0, 1] at a hit, filtered for a pixel footprint [m].
   float shade(const RayHit& hit, double footprint_m) const;
   // Unfiltered (level-0, bilinear) intensity at a point of a face.
