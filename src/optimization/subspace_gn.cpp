@@ -9,6 +9,7 @@
 
 #include "vitamin_e/geometry/lie.h"
 #include "vitamin_e/geometry/projection.h"
+#include "vitamin_e/optimization/block_solvers.h"
 
 namespace vitamin_e {
 namespace optimization {
@@ -23,6 +24,7 @@ void BaOptions::validate() const {
   if (!(tolerance >= 0.0)) throw std::invalid_argument("tolerance must be >= 0");
   if (threads < 1) throw std::invalid_argument("threads must be >= 1");
   if (camera_iterations < 1) throw std::invalid_argument("camera_iterations must be >= 1");
+  if (plain_gs_passes < 1) throw std::invalid_argument("plain_gs_passes must be >= 1");
   if (!(camera_gs_tolerance >= 0.0)) throw std::invalid_argument("camera_gs_tolerance must be >= 0");
   if (!(initial_lambda >= 0.0)) throw std::invalid_argument("initial_lambda must be >= 0");
   if (max_retries < 0) throw std::invalid_argument("max_retries must be >= 0");
@@ -164,7 +166,6 @@ class SubspaceGn {
 
     Hcc_.resize(ncf);
     gc_.resize(ncf);
-    S_.resize(ncf);
     b_.resize(ncf);
     dc_.resize(ncf);
     Hpp_.resize(npf);
@@ -286,124 +287,66 @@ class SubspaceGn {
           for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s) Y_[s].noalias() = Hcp_[s] * Hpp_inv_[j];
       }
     });
-    std::vector<Eigen::LDLT<Matrix6d>> solvers(ncf);
-    std::vector<Matrix6d> coupling(ncf);  // Hcc_d - S = sum Y Hcp^T (the camera's own points)
+    std::vector<Matrix6d> Hd(ncf);
     for (int i = 0; i < ncf; ++i) {
-      Matrix6d Hd = Hcc_[i];
-      Hd.diagonal() = Hd.diagonal() * (1.0 + lambda) + Vector6d::Constant(1e-12 * (1.0 + Hd.trace()));
-      b_[i] = -gc_[i];
-      coupling[i].setZero();
-      if (O_.use_schur) {
-        for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
-          const int s = cam_slots_[a];
-          coupling[i].noalias() += Y_[s] * Hcp_[s].transpose();
-          b_[i].noalias() += Y_[s] * gp_[slot_point_[s]];
-        }
-      }
-      S_[i] = Hd - coupling[i];
-      solvers[i].compute(S_[i]);
+      Hd[i] = Hcc_[i];
+      Hd[i].diagonal() = Hd[i].diagonal() * (1.0 + lambda) + Vector6d::Constant(1e-12 * (1.0 + Hd[i].trace()));
       dc_[i].setZero();
     }
-    if (O_.use_schur && O_.camera_solver == BaOptions::CameraSolver::kConjugateGradient && ncf > 1) {
-      conjugateGradientCameras(solvers, coupling);
+    if (ncf == 0) {
       pointUpdates();
       return;
     }
-    const int passes = (ncf <= 1 && O_.use_schur) ? 1 : O_.camera_iterations;
-    for (int pass = 0; pass < passes && ncf > 0; ++pass) {
-      double max_change = 0.0, max_update = 0.0;
-      for (int i = 0; i < ncf; ++i) {
-        Vector6d rhs = b_[i];
-        if (O_.use_schur) {
-          // Eq. 11 with the points eliminated: other cameras act through q_j.
+    if (O_.use_schur) {
+      // Eq. 11 with the points eliminated: the 6x6 blocks of the reduced camera system
+      // S_il = H_cc,i [i==l] - sum_j H_cp,ij H_pp,j^-1 H_pc,jl and b_i = -g_c,i + sum_j Y_ij g_p,j,
+      // accumulated camera by camera (rows are independent).
+      S_.resize(ncf);
+      parallelFor(ncf, O_.threads, [&](int begin, int end, int) {
+        for (int i = begin; i < end; ++i) {
+          S_.at(i, i) = Hd[i];
+          b_[i] = -gc_[i];
           for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
             const int s = cam_slots_[a];
-            rhs.noalias() += Y_[s] * q_[slot_point_[s]];
+            const int j = slot_point_[s];
+            b_[i].noalias() += Y_[s] * gp_[j];
+            for (int t = slot_begin_[j]; t < slot_begin_[j + 1]; ++t)
+              S_.at(i, slot_cam_[t]).noalias() -= Y_[s] * Hcp_[t].transpose();
           }
-          rhs.noalias() -= coupling[i] * dc_[i];  // remove this camera's own share of q
-        } else {
-          for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
-            const int s = cam_slots_[a];
-            rhs.noalias() -= Hcp_[s] * dp_[slot_point_[s]];
-          }
-        }
-        const Vector6d d = solvers[i].solve(rhs);
-        const Vector6d change = d - dc_[i];
-        dc_[i] = d;
-        if (O_.use_schur)
-          for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
-            const int s = cam_slots_[a];
-            q_[slot_point_[s]].noalias() += Hcp_[s].transpose() * change;
-          }
-        max_change = std::max(max_change, change.lpNorm<Eigen::Infinity>());
-        max_update = std::max(max_update, d.lpNorm<Eigen::Infinity>());
-      }
-      if (!O_.use_schur) pointUpdates();  // Eq. 12 inside the plain Gauss-Seidel loop
-      if (max_change <= O_.camera_gs_tolerance * max_update) break;
-    }
-    pointUpdates();
-  }
-
-  // The camera blocks of Eq. 11 (points eliminated) solved jointly by conjugate gradients
-  // preconditioned with the inverse 6x6 diagonal blocks S_ii: the reduced camera matrix is only
-  // applied through the 6x3 couplings, never formed. Leaves dc_ and q_ = sum_i H_pc dc_i.
-  void conjugateGradientCameras(const std::vector<Eigen::LDLT<Matrix6d>>& solvers,
-                                const std::vector<Matrix6d>& coupling) {
-    const int ncf = freeCameras();
-    // v -> S v with S = blockdiag(H_cc,d) - H_cp H_pp^-1 H_pc; u_j = sum_i H_pc,ij v_i.
-    auto apply = [&](const std::vector<Vector6d>& v, std::vector<Vector6d>* out) {
-      parallelFor(freePoints(), O_.threads, [&](int begin, int end, int) {
-        for (int j = begin; j < end; ++j) {
-          q_[j].setZero();
-          for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
-            q_[j].noalias() += Hcp_[s].transpose() * v[slot_cam_[s]];
         }
       });
+      if (O_.camera_solver == BaOptions::CameraSolver::kConjugateGradient)
+        solveBlockPcg(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
+      else
+        solveBlockGaussSeidel(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
+      parallelFor(npf, O_.threads, [&](int begin, int end, int) {
+        for (int j = begin; j < end; ++j)
+          for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
+            q_[j].noalias() += Hcp_[s].transpose() * dc_[slot_cam_[s]];
+      });
+      pointUpdates();
+      return;
+    }
+    // Plain Eq. 11 / Eq. 12 block Gauss-Seidel: camera blocks with the points' current
+    // updates, then the point blocks with the cameras' updates, repeated.
+    std::vector<Eigen::LDLT<Matrix6d>> solvers(ncf);
+    for (int i = 0; i < ncf; ++i) solvers[i].compute(Hd[i]);
+    for (int pass = 0; pass < O_.plain_gs_passes; ++pass) {
+      double max_change = 0.0, max_update = 0.0;
       for (int i = 0; i < ncf; ++i) {
-        Vector6d o = (S_[i] + coupling[i]) * v[i];
+        Vector6d rhs = -gc_[i];
         for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
           const int s = cam_slots_[a];
-          o.noalias() -= Y_[s] * q_[slot_point_[s]];
+          rhs.noalias() -= Hcp_[s] * dp_[slot_point_[s]];
         }
-        (*out)[i] = o;
+        const Vector6d d = solvers[i].solve(rhs);
+        max_change = std::max(max_change, (d - dc_[i]).lpNorm<Eigen::Infinity>());
+        max_update = std::max(max_update, d.lpNorm<Eigen::Infinity>());
+        dc_[i] = d;
       }
-    };
-    auto dot = [&](const std::vector<Vector6d>& a, const std::vector<Vector6d>& b) {
-      double d = 0.0;
-      for (int i = 0; i < ncf; ++i) d += a[i].dot(b[i]);
-      return d;
-    };
-    std::vector<Vector6d> r = b_, z(ncf), p(ncf), Ap(ncf);
-    for (int i = 0; i < ncf; ++i) {
-      dc_[i].setZero();
-      z[i] = solvers[i].solve(r[i]);
+      pointUpdates();
+      if (max_change <= O_.camera_gs_tolerance * max_update) break;
     }
-    p = z;
-    double rz = dot(r, z);
-    const double b_norm = std::sqrt(dot(b_, b_));
-    for (int it = 0; it < O_.camera_iterations && rz > 0.0; ++it) {
-      apply(p, &Ap);
-      const double pAp = dot(p, Ap);
-      if (!(pAp > 0.0)) break;
-      const double alpha = rz / pAp;
-      for (int i = 0; i < ncf; ++i) {
-        dc_[i].noalias() += alpha * p[i];
-        r[i].noalias() -= alpha * Ap[i];
-      }
-      if (std::sqrt(dot(r, r)) <= O_.camera_gs_tolerance * b_norm) break;
-      for (int i = 0; i < ncf; ++i) z[i] = solvers[i].solve(r[i]);
-      const double rz_new = dot(r, z);
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      for (int i = 0; i < ncf; ++i) p[i] = z[i] + beta * p[i];
-    }
-    parallelFor(freePoints(), O_.threads, [&](int begin, int end, int) {
-      for (int j = begin; j < end; ++j) {
-        q_[j].setZero();
-        for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
-          q_[j].noalias() += Hcp_[s].transpose() * dc_[slot_cam_[s]];
-      }
-    });
   }
 
   // Eq. 12: dp_j = -H_pp^-1 (g_p + sum_i H_pc dc_i), independent per point.
@@ -480,7 +423,8 @@ class SubspaceGn {
   std::vector<int> pt_begin_, pt_obs_, obs_slot_, cam_only_obs_;
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
-  std::vector<Matrix6d> Hcc_, S_;
+  std::vector<Matrix6d> Hcc_;
+  BlockMatrix6 S_;
   std::vector<Vector6d> gc_, b_, dc_;
   std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, Rt_, R_;
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;

@@ -6,14 +6,16 @@
 //  1. Linearize every observation that touches a free variable at the current estimate
 //     (analytic Jacobians, Geman-McClure IRLS weights w = rho'(|r|^2)): per camera the 6x6
 //     block H_cc and g_c, per point the 3x3 block H_pp and g_p, per (camera, point) pair the
-//     6x3 coupling H_cp. Nothing larger than 6x6 is ever formed or inverted.
-//  2. Camera blocks (Eq. 11). With use_schur (default) each camera update eliminates the
-//     points it sees: its 6x6 system is S_ii = H_cc,i - sum_j H_cp H_pp^-1 H_pc (the 6x6
-//     diagonal block of the reduced camera system) and the coupling with the other cameras goes
-//     through the shared points, using their latest updates (block Gauss-Seidel over cameras,
-//     repeated camera_iterations times or until the camera updates stop changing). Without
-//     use_schur it is the paper's plain Eq. 11/12 Gauss-Seidel (camera blocks with the points'
-//     current updates, then point blocks), repeated camera_iterations times.
+//     6x3 coupling H_cp. Nothing larger than 6x6 is ever inverted or factorized.
+//  2. Camera blocks (Eq. 11). With use_schur (default) each camera update eliminates the points
+//     it sees (the supplementary's variable elimination): the 6x6 blocks of the reduced camera
+//     system S_il = H_cc,i [i==l] - sum_j H_cp,ij H_pp,j^-1 H_pc,jl (only pairs of free cameras
+//     sharing a point are non-zero) and b_i = -g_c,i + sum_j H_cp,ij H_pp,j^-1 g_p,j are
+//     accumulated, then solved block-wise: by block Gauss-Seidel over the 6x6 camera blocks
+//     (the paper's iteration) or by conjugate gradients preconditioned with the 6x6 diagonal
+//     blocks (default: Gauss-Seidel needs hundreds of passes when a chain of cameras is free).
+//     Without use_schur it is the paper's plain Eq. 11/12 Gauss-Seidel (camera blocks with the
+//     points' current updates, then point blocks), repeated plain_gs_passes times.
 //  3. Point blocks (Eq. 12): each 3x3 update given the camera updates; the points are
 //     independent given the cameras, so this runs on `threads` threads.
 //  4. The step is applied (T_w_c <- T_w_c * expSE3(dc), p_w <- p_w + dp) and kept only if the
@@ -37,18 +39,15 @@ struct BaOptions {
   double tolerance = 1e-6;       // relative cost change of an accepted sweep
   int threads = 1;               // point blocks (and linearization) run on this many threads
   bool use_schur = true;         // eliminate the points inside each camera update
-  // How the coupled camera blocks of Eq. 11 are solved within a sweep (with use_schur):
-  //  kGaussSeidel: block Gauss-Seidel passes over the 6x6 camera blocks (the paper's form);
-  //    stops when max |change| < camera_gs_tolerance * max |update|;
-  //  kConjugateGradient: conjugate gradients on the same reduced camera system, preconditioned
-  //    by the inverse 6x6 blocks (still only 6x6 solves; converges in far fewer passes when
-  //    many cameras are free, see docs in the header top); stops when the residual norm falls
-  //    below camera_gs_tolerance * |rhs|.
-  // Without use_schur the plain Eq. 11/12 Gauss-Seidel is used.
+  // How the reduced camera system (use_schur) is solved: block Gauss-Seidel (stops when
+  // max |change| <= camera_gs_tolerance * max |update|) or block-Jacobi preconditioned CG
+  // (stops when |residual| <= camera_gs_tolerance * |rhs|). Both only factorize 6x6 blocks; a
+  // pass costs (free cameras)^2 6x6 products, negligible next to the linearization.
   enum class CameraSolver { kGaussSeidel, kConjugateGradient };
   CameraSolver camera_solver = CameraSolver::kConjugateGradient;
-  int camera_iterations = 30;    // max passes (GS) / iterations (CG) over the camera blocks
-  double camera_gs_tolerance = 1e-4;  // (name kept for configs; used by both solvers)
+  int camera_iterations = 200;         // max passes (GS) / iterations (CG)
+  double camera_gs_tolerance = 1e-10;  // (name kept for configs; used by both solvers)
+  int plain_gs_passes = 10;  // without use_schur: passes of the plain Eq. 11/12 Gauss-Seidel
   double initial_lambda = 1e-4;  // LM damping (relative to the block diagonals)
   int max_retries = 8;           // damped re-solves per sweep before giving up
   void validate() const;         // throws std::invalid_argument naming the key
