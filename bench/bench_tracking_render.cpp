@@ -380,9 +380,7 @@ int main(int argc, char** argv) {
   std::printf("%-34s %14d %14s\n", "tracked/frame min", min_tracked, "");
   std::printf("%-34s %14.2f %14.2f\n", "ms/frame median", median(ours.ms), median(klt.ms));
   std::printf("%-34s %14.2f %14.2f\n", "ms/frame p95", pct(ours.ms, 95), pct(klt.ms, 95));
-  std::printf("%-34s %14.2f %14.2f\n", "CPU ms/frame median (all threads)", median(ours.cpu), median(klt.cpu),
-              ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
-              klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
+  std::printf("%-34s %14.2f %14.2f\n", "CPU ms/frame median (all threads)", median(ours.cpu), median(klt.cpu));
   std::printf("%-34s %14.0f %14.0f\n", "track length median [frames]", median(ours.lengths), median(klt.lengths));
   std::printf("%-34s %14.4f %14.4f\n", "track steps within 1 px", our_ratio, klt_ratio);
   std::printf("%-34s %14ld %14ld\n", "track steps checked", ours.checked, klt.checked);
