@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Runs vitamin_e on a list of sequences and prints the paper's table (Markdown).
 #   ./scripts/evaluate_suite.sh LIST [--out DIR] [--runs-only] [-- run_dataset.sh flags...]
-# LIST: one sequence per line, `NAME DATASET_PATH [GROUNDTRUTH]` ('#' comments).
-# GROUNDTRUTH defaults to DATASET_PATH/groundtruth_cam0_tum.txt when present.
+# LIST: one sequence per line, `NAME DATASET_PATH [GROUNDTRUTH [SENSOR_YAML]]` ('#'
+# comments). GROUNDTRUTH defaults to DATASET_PATH/groundtruth_cam0_tum.txt, else
+# the dataset's EuRoC ground truth (body pose, turned into the camera's with the
+# dataset's own sensor.yaml). SENSOR_YAML: GROUNDTRUTH is a body pose, camera =
+# body * T_BS of that file (e.g. the shared EuRoC TUM ground truth files).
 # Each sequence runs `./scripts/run_dataset.sh DATASET OUT/NAME` (writes
 # trajectory.txt and stats.json), then `./scripts/evaluate.sh` (Sim(3) ATE).
 # OUT defaults to out/suite. The table also goes to OUT/results.md.
@@ -53,12 +56,14 @@ v = sys.argv[1]; s = float(sys.argv[2]); d = int(sys.argv[3])
 print(("%%.%df" % d) % (float(v) * s) if v not in ("", "None") else "n/a")' "$1" "$2" "$3"; }
 
 rows=()
-while read -r name dataset gt rest; do
+while read -r name dataset gt sensor rest; do
   [ -z "${name:-}" ] && continue
   case "$name" in \#*) continue ;; esac
   [ -n "${dataset:-}" ] || ve_die "$list: line for '$name' has no DATASET_PATH"
   if [ -z "${gt:-}" ] && [ -f "$dataset/groundtruth_cam0_tum.txt" ]; then
     gt="$dataset/groundtruth_cam0_tum.txt"
+  elif [ -z "${gt:-}" ] && [ -f "$dataset/mav0/state_groundtruth_estimate0/data.csv" ]; then
+    gt="$dataset/mav0/state_groundtruth_estimate0/data.csv"
   fi
   run="$out/$name"
   mkdir -p "$run"
@@ -77,6 +82,7 @@ while read -r name dataset gt rest; do
   else
     eval_args=("$run/trajectory.txt" "$gt")
     [ -n "$frames" ] && eval_args+=(--frames "$frames")
+    [ -n "${sensor:-}" ] && eval_args+=(--body-to-camera "$sensor")
     if json="$("$VE_ROOT/scripts/evaluate.sh" "${eval_args[@]}" 2>"$run/evaluate.err" | tee "$run/evaluate.txt" | tail -n 1)"; then
       ate="$(echo "$json" | json_line_get ate_rmse_m)"
       success="$(echo "$json" | json_line_get success_rate)"

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -27,7 +28,8 @@ const char* kUsage =
     "                    or KITTI poses (auto-detected); GT may be a dataset folder\n"
     "  --frames N        number of input frames for the success rate (default: estimate poses)\n"
     "  --max-dt S        association tolerance in seconds (default 0.02, nearest pose)\n"
-    "  --body-to-camera Y  GT is the body pose: use T_w_b * T_BS (T_BS from an EuRoC sensor.yaml)\n"
+    "  --body-to-camera Y  GT is the body pose: use T_w_b * T_BS (T_BS from an EuRoC sensor.yaml);\n"
+    "                    automatic for mav0/state_groundtruth_estimate0/data.csv beside mav0/cam0/sensor.yaml\n"
     "  --se3             rigid alignment (scale known) instead of Sim(3)\n"
     "  --rpe-delta S     time delta of the second RPE (default 1 s)\n"
     "  --kitti-times F   timestamps for KITTI poses files (default times.txt beside them, or 0.1 s steps)\n"
@@ -106,6 +108,13 @@ int main(int argc, char** argv) {
     const std::string gt_path = ve::resolveTrajectoryPath(positional[1]);
     ve::Trajectory gt = ve::readTrajectory(gt_path, gt_options);
     if (gt.empty()) fail(gt_path + ": empty ground truth (no poses)");
+    // EuRoC ground truth is the body (IMU) pose: use the dataset's own T_BS.
+    const std::string euroc_suffix = "state_groundtruth_estimate0/data.csv";
+    if (body_to_camera.empty() && gt_path.size() > euroc_suffix.size() &&
+        gt_path.compare(gt_path.size() - euroc_suffix.size(), euroc_suffix.size(), euroc_suffix) == 0) {
+      const std::string yaml = gt_path.substr(0, gt_path.size() - euroc_suffix.size()) + "cam0/sensor.yaml";
+      if (std::ifstream(yaml).good()) body_to_camera = yaml;
+    }
     if (!body_to_camera.empty()) gt = ve::applyBodyToCamera(gt, ve::loadBodyToCamera(body_to_camera));
     const ve::EvalResult r = ve::evaluate(est, gt, cfg);
     if (!aligned_out.empty()) ve::writeTum(aligned_out, r.aligned);
