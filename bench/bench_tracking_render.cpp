@@ -226,6 +226,7 @@ int main(int argc, char** argv) {
     else if (k == "--adaptive") cfg.adaptive_smoothing = std::stoi(argv[i + 1]);
     else if (k == "--max-sigma") cfg.max_smoothing_sigma = std::stod(argv[i + 1]);
     else if (k == "--noise-ref") cfg.noise_reference = std::stod(argv[i + 1]);
+    else if (k == "--blend") cfg.prediction_blend = std::stod(argv[i + 1]);
     else if (k == "--nms") cfg.nms_radius_px = std::stoi(argv[i + 1]);
     else if (k == "--track-sigma") cfg.track_sigma_px = std::stod(argv[i + 1]);
     else if (k == "--min-track-curvature") cfg.min_track_curvature = std::stod(argv[i + 1]);

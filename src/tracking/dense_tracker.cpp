@@ -75,6 +75,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
                                static_cast<float>(cfg.min_abs_curvature));
   const float inv_scale = 1.f / scale;
   const float max_ratio = static_cast<float>(cfg.max_curvature_ratio);
+  const float blend = static_cast<float>(cfg.prediction_blend);
   steps.resize(tracks.size());
   auto work = [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
@@ -105,6 +106,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       }
       const Eigen::Vector2f qs = refineSubpixel(prev_kappa, q, t.sign);
       s.ok = (qs - t.uv).squaredNorm() <= fb2;
+      if (s.ok && blend > 0.f && (pred - s.uv).squaredNorm() < 1.f) s.uv += blend * (pred - s.uv);
     }
   };
   const int n = static_cast<int>(tracks.size());

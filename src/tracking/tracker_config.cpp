@@ -44,6 +44,8 @@ void TrackerConfig::validate() const {
   require(std::isfinite(lambda) && lambda >= 0.0, "lambda", "must be finite and >= 0");
   require(std::isfinite(track_sigma_px) && track_sigma_px > 0.0, "track_sigma_px", "must be > 0");
   require(max_climb_steps >= 1, "max_climb_steps", "must be >= 1");
+  require(std::isfinite(prediction_blend) && prediction_blend >= 0.0 && prediction_blend < 1.0, "prediction_blend",
+          "must be in [0, 1)");
   require(polish_steps >= 0, "polish_steps", "must be >= 0");
   require(std::isfinite(fb_threshold_px) && fb_threshold_px > 0.0, "fb_threshold_px", "must be > 0");
   require(std::isfinite(min_track_curvature) && min_track_curvature >= 0.0, "min_track_curvature",

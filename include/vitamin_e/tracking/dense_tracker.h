@@ -50,6 +50,7 @@ struct TrackerConfig {
   double lambda = 8.0;              // weight of the prediction prior in F, in normalized-curvature units (>= 0)
   double track_sigma_px = 1.5;      // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
   int max_climb_steps = 12;         // hill-climbing steps (8-neighbour moves) before giving up (>= 1)
+  double prediction_blend = 0.3;    // [0, 1): move the sub-pixel extremum this far toward x_bar when within 1 px (temporal filter; 0 = pure extremum)
   int polish_steps = 0;             // after maximizing F, climb kappa alone (no prior) up to this many steps; 0 = off (the prior helps on noisy images)
   double fb_threshold_px = 1.0;     // forward-backward check: max distance back to the old position [px] (> 0)
   double min_track_curvature = 0.5; // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
