@@ -85,7 +85,9 @@ while read -r name dataset gt sensor rest; do
     [ -n "${sensor:-}" ] && eval_args+=(--body-to-camera "$sensor")
     if json="$("$VE_ROOT/scripts/evaluate.sh" "${eval_args[@]}" 2>"$run/evaluate.err" | tee "$run/evaluate.txt" | tail -n 1)"; then
       ate="$(echo "$json" | json_line_get ate_rmse_m)"
-      success="$(echo "$json" | json_line_get success_rate)"
+      # Success as in the paper: tracked frames / all frames (stats.json); the
+      # evaluator's matched poses / frames only when the run did not report it.
+      [ -n "$success" ] || success="$(echo "$json" | json_line_get success_rate)"
     else
       note="evaluation failed: $(tail -n 1 "$run/evaluate.err")"
     fi
