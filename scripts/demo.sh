@@ -85,8 +85,8 @@ if [ "$eval_ok" = 1 ]; then
   "$py" - "$(tail -n 1 "$out/evaluation.txt")" <<'PYEOF'
 import json, sys
 r = json.loads(sys.argv[1])
-print("ATE RMSE %.2f cm (Sim(3) aligned, scale %.4f), %d of %d frames tracked (%.1f %%)"
-      % (100 * r["ate_rmse_m"], r["scale"], r["matched"], r["frames"], 100 * r["success_rate"]))
+print("ATE RMSE %.2f cm (Sim(3) aligned, scale %.4f) over %d poses of %d frames"
+      % (100 * r["ate_rmse_m"], r["scale"], r["matched"], r["frames"]))
 PYEOF
   echo "plot: $out/trajectory.png"
 fi
@@ -94,7 +94,9 @@ if [ -f "$stats" ]; then
   "$py" - "$stats" <<'PYEOF'
 import json, sys
 s = json.load(open(sys.argv[1]))
-print("frames %s, tracked %s, init retries %s" % (s.get("frames"), s.get("tracked_frames"), s.get("init_retries")))
+sr = s.get("success_rate")
+print("frames %s, tracked %s (%s), init retries %s" % (s.get("frames"), s.get("tracked_frames"),
+      "n/a" if sr is None else "%.1f %%" % (100 * sr), s.get("init_retries")))
 t = s.get("timing_ms") or {}
 if t:
     print("\n| stage | mean [ms] | median [ms] | p95 [ms] | count |")
