@@ -2,6 +2,7 @@
 # Evaluates an estimated trajectory against ground truth (Sim(3)-aligned ATE,
 # RPE, success rate) with vitamin_e_evaluate, building it if needed.
 #   ./scripts/evaluate.sh TRAJECTORY GROUNDTRUTH [--frames N] [--plot OUT.png] [vitamin_e_evaluate flags...]
+# TRAJECTORY: a trajectory file (TUM, EuRoC csv, KITTI) or a run folder with trajectory.txt.
 # GROUNDTRUTH: TUM / EuRoC csv / KITTI poses, or a dataset folder. Other flags
 # (--max-dt S, --body-to-camera YAML, --se3, --json, --aligned-out F, ...) are
 # passed through. The last line printed is the JSON result.
@@ -23,6 +24,11 @@ while [ $# -gt 0 ]; do
 done
 
 [ -e "$traj" ] || ve_die "$traj: no such trajectory file"
+# A run folder (run_dataset.sh output) stands for its trajectory.txt.
+if [ -d "$traj" ]; then
+  [ -f "$traj/trajectory.txt" ] || ve_die "$traj: a folder without trajectory.txt"
+  traj="$traj/trajectory.txt"
+fi
 [ -e "$gt" ] || ve_die "$gt: no such ground-truth file or folder"
 if ! grep -qv '^[[:space:]]*\(#.*\)\?$' "$traj"; then
   ve_die "$traj: the trajectory is empty (no poses): the run tracked no frame, nothing to evaluate"
