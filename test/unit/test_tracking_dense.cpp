@@ -251,6 +251,28 @@ TEST(DenseTracker, BlackAndConstantImagesGiveNoFeatures) {
   EXPECT_THROW(tracker.track(cv::Mat(480, 752, CV_32FC1, cv::Scalar(1)), 0.0), std::invalid_argument);
 }
 
+TEST(DenseTracker, SmoothsMoreOnNoisyImages) {
+  const int w = 320, h = 240;
+  const auto blobs = randomBlobs(700, w, h, 13);
+  const cv::Mat clean = renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero());
+  cv::Mat noise(h, w, CV_32F), noisy;
+  cv::randn(noise, 0.0, 12.0);
+  clean.convertTo(noisy, CV_32F);
+  noisy += noise;
+  noisy.convertTo(noisy, CV_8U);
+  vt::TrackerConfig cfg;
+  vt::DenseTracker a(cfg), b(cfg);
+  const auto fc = a.track(clean, 0.0);
+  const auto fn = b.track(noisy, 0.0);
+  EXPECT_DOUBLE_EQ(fc.smoothing_sigma, cfg.smoothing_sigma);
+  EXPECT_GT(fn.noise_ratio, 2.0 * fc.noise_ratio);
+  EXPECT_GT(fn.smoothing_sigma, cfg.smoothing_sigma);
+  EXPECT_LE(fn.smoothing_sigma, cfg.max_smoothing_sigma);
+  cfg.adaptive_smoothing = false;
+  vt::DenseTracker c(cfg);
+  EXPECT_DOUBLE_EQ(c.track(noisy, 0.0).smoothing_sigma, cfg.smoothing_sigma);
+}
+
 TEST(TrackerConfig, ValidateNamesTheField) {
   vt::TrackerConfig c;
   EXPECT_NO_THROW(c.validate());
