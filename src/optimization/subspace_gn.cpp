@@ -27,6 +27,7 @@ void BaOptions::validate() const {
   if (plain_gs_passes < 1) throw std::invalid_argument("plain_gs_passes must be >= 1");
   if (!(camera_gs_tolerance >= 0.0)) throw std::invalid_argument("camera_gs_tolerance must be >= 0");
   if (!(initial_lambda >= 0.0)) throw std::invalid_argument("initial_lambda must be >= 0");
+  if (point_iterations < 0) throw std::invalid_argument("point_iterations must be >= 0");
   if (max_retries < 0) throw std::invalid_argument("max_retries must be >= 0");
 }
 
@@ -61,6 +62,7 @@ class SubspaceGn {
 
   int freeCameras() const { return static_cast<int>(cams_.size()); }
   int freePoints() const { return static_cast<int>(pts_.size()); }
+  int rejectedSteps() const { return rejected_; }
   int activeObservations() const { return static_cast<int>(pt_obs_.size() + cam_only_obs_.size()); }
 
   // Runs the sweeps; returns {sweeps, converged, lambda}.
@@ -88,12 +90,14 @@ class SubspaceGn {
           break;
         }
         restoreState();
+        ++rejected_;
         lambda = std::max(lambda * 10.0, 1e-8);
       }
       if (!accepted) {
         *converged = cost <= 1e-20 * std::max<size_t>(1, pt_obs_.size());
         break;
       }
+      if (O_.point_iterations > 0) new_cost -= refinePoints(O_.point_iterations);
       const double rel = (cost - new_cost) / std::max(cost, 1e-300);
       cost = new_cost;
       if (rel < O_.tolerance) {
@@ -300,7 +304,7 @@ class SubspaceGn {
     if (O_.use_schur) {
       // Eq. 11 with the points eliminated: the 6x6 blocks of the reduced camera system
       // S_il = H_cc,i [i==l] - sum_j H_cp,ij H_pp,j^-1 H_pc,jl and b_i = -g_c,i + sum_j Y_ij g_p,j,
-      // accumulated camera by camera (rows are independent).
+      // accumulated row by row (rows are independent; the upper triangle, then mirrored).
       S_.resize(ncf);
       parallelFor(ncf, O_.threads, [&](int begin, int end, int) {
         for (int i = begin; i < end; ++i) {
@@ -311,10 +315,12 @@ class SubspaceGn {
             const int j = slot_point_[s];
             b_[i].noalias() += Y_[s] * gp_[j];
             for (int t = slot_begin_[j]; t < slot_begin_[j + 1]; ++t)
-              S_.at(i, slot_cam_[t]).noalias() -= Y_[s] * Hcp_[t].transpose();
+              if (slot_cam_[t] >= i) S_.at(i, slot_cam_[t]).noalias() -= Y_[s] * Hcp_[t].transpose();
           }
         }
       });
+      for (int i = 0; i < ncf; ++i)
+        for (int l = i + 1; l < ncf; ++l) S_.at(l, i) = S_.at(i, l).transpose();
       if (O_.camera_solver == BaOptions::CameraSolver::kConjugateGradient)
         solveBlockPcg(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
       else
@@ -347,6 +353,68 @@ class SubspaceGn {
       pointUpdates();
       if (max_change <= O_.camera_gs_tolerance * max_update) break;
     }
+  }
+
+  // Eq. 12 relinearized: Gauss-Newton steps on each point alone with the cameras fixed (each
+  // point's cost only involves its own observations, so every step is checked and kept per
+  // point). Returns the total cost decrease.
+  double refinePoints(int iterations) {
+    cacheCameras();
+    const int T = std::max(1, O_.threads);
+    std::vector<double> gain_t(T, 0.0);
+    parallelFor(freePoints(), T, [&](int begin, int end, int t) {
+      for (int j = begin; j < end; ++j) {
+        Eigen::Vector3d p = P_.points[pts_[j]].p_w;
+        auto eval = [&](const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) {
+          double c = 0.0;
+          if (H) H->setZero(), g->setZero();
+          for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
+            const BaObservation& o = P_.observations[pt_obs_[a]];
+            const Eigen::Vector3d p_c = Rt_[o.camera] * (x - t_[o.camera]);
+            if (p_c.z() <= kMinDepth) {
+              c += kernel_.sigma2;
+              continue;
+            }
+            const Eigen::Vector2d r = o.uv - K_.project(p_c);
+            const double sq = r.squaredNorm();
+            c += kernel_.rho(sq);
+            if (!H) continue;
+            geometry::Matrix23d Jp;
+            geometry::reprojectionJacobians(K_, p_c, R_[o.camera], nullptr, &Jp);
+            const double w = kernel_.weight(sq);
+            H->noalias() += w * Jp.transpose() * Jp;
+            g->noalias() += w * Jp.transpose() * r;
+          }
+          return c;
+        };
+        double lambda = O_.initial_lambda;
+        Eigen::Matrix3d H;
+        Eigen::Vector3d g;
+        for (int it = 0; it < iterations; ++it) {
+          const double c0 = eval(p, &H, &g);
+          bool improved = false;
+          for (int attempt = 0; attempt < 3 && !improved; ++attempt) {
+            Eigen::Matrix3d Hd = H;
+            Hd.diagonal() = Hd.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
+            const Eigen::Vector3d dp = -(Hd.inverse() * g);
+            const double c1 = eval(p + dp, nullptr, nullptr);
+            if (c1 < c0) {
+              p += dp;
+              gain_t[t] += c0 - c1;
+              lambda *= 0.3;
+              improved = true;
+            } else {
+              lambda *= 10.0;
+            }
+          }
+          if (!improved) break;
+        }
+        P_.points[pts_[j]].p_w = p;
+      }
+    });
+    double gain = 0.0;
+    for (double v : gain_t) gain += v;
+    return gain;
   }
 
   // Eq. 12: dp_j = -H_pp^-1 (g_p + sum_i H_pc dc_i), independent per point.
@@ -423,6 +491,7 @@ class SubspaceGn {
   std::vector<int> pt_begin_, pt_obs_, obs_slot_, cam_only_obs_;
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
+  int rejected_ = 0;
   std::vector<Matrix6d> Hcc_;
   BlockMatrix6 S_;
   std::vector<Vector6d> gc_, b_, dc_;
@@ -446,6 +515,7 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   summary.free_points = solver.freePoints();
   summary.active_observations = solver.activeObservations();
   solver.run(&summary.sweeps, &summary.converged, &summary.final_lambda);
+  summary.rejected_steps = solver.rejectedSteps();
   summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   summary.final_cost = baCost(problem, options.robust_sigma_px);
   summary.residual_px = baResidualNorms(problem);

@@ -21,6 +21,9 @@
 //  4. The step is applied (T_w_c <- T_w_c * expSE3(dc), p_w <- p_w + dp) and kept only if the
 //     robust cost decreased; otherwise the LM damping lambda (Marquardt: each block's diagonal
 //     is scaled by 1 + lambda) grows and the step is recomputed from the same linearization.
+//  5. (point_iterations > 0) After an accepted step, relinearized Gauss-Newton steps on each
+//     point alone (Eq. 12 with the cameras fixed), kept per point only if its cost decreases:
+//     under Geman-McClure the slow modes are mostly single points, and these steps are cheap.
 // Stops when the relative cost decrease of an accepted step is below `tolerance`, when no
 // damped step decreases the cost, or after max_sweeps.
 //
@@ -50,6 +53,9 @@ struct BaOptions {
   int plain_gs_passes = 10;  // without use_schur: passes of the plain Eq. 11/12 Gauss-Seidel
   double initial_lambda = 1e-4;  // LM damping (relative to the block diagonals)
   int max_retries = 8;           // damped re-solves per sweep before giving up
+  // After each accepted sweep, this many relinearized Gauss-Newton steps on every point alone
+  // (Eq. 12 with the cameras fixed; cheap, independent per point, threaded).
+  int point_iterations = 1;
   void validate() const;         // throws std::invalid_argument naming the key
 };
 
@@ -57,6 +63,7 @@ struct BaSummary {
   double initial_cost = 0.0;  // baCost at the start (all observations)
   double final_cost = 0.0;    // baCost at the end
   int sweeps = 0;             // linearizations performed
+  int rejected_steps = 0;     // damped steps that did not decrease the cost (re-solved)
   double time_ms = 0.0;
   bool converged = false;     // relative cost change fell below tolerance
   std::vector<double> residual_px;  // per observation, final |r| in pixels
