@@ -68,7 +68,9 @@ Args parse(int argc, char** argv) {
     else if (k == "--max-depth-2p5") a.max_depth_hi = std::stod(next());
     else if (k == "--weight-ref") a.weight_ref = std::stod(next());
     else if (k == "--no-warm") a.nltgv_cfg.warm_start = false;
-    else if (k == "--nltgv-iters") a.nltgv_cfg.iterations = a.nltgv_cfg.warm_iterations = std::stoi(next());
+    else if (k == "--warm-duals-only") a.nltgv_cfg.warm_start_primal = false;
+    else if (k == "--warm-iters") a.nltgv_cfg.warm_iterations = std::stoi(next());
+    else if (k == "--nltgv-iters") a.nltgv_cfg.iterations = std::stoi(next());
     else if (k == "--beta") a.nltgv_cfg.beta = std::stod(next());
     else if (k == "--lambda") a.nltgv_cfg.lambda = std::stod(next());
     else throw std::runtime_error("unknown option " + k);

@@ -58,6 +58,10 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
     ny[i] = (V[i].uv.y() - K.cy) / K.fy;
     if (config_.warm_start) {
       const auto it = prev_vertices_.find(V[i].id);
+      if (it != prev_vertices_.end() && !config_.warm_start_primal) {
+        ++stats.warm_started;
+        continue;
+      }
       if (it != prev_vertices_.end()) {
         xi[i] = z[i] * it->second.ratio;
         wx[i] = it->second.wx * xi[i];

@@ -7,14 +7,16 @@
 // (x = normalized coordinates), and every vertex lambda * |xi_i - z_i| (z: the
 // measured inverse depth). As in NLTGV (Ranftl et al. 2014) the edge terms carry
 // support weights: alpha_ij = alpha * max(min_support, exp(-(r_ij / support_sigma)^2))
-// with r_ij the relative jump of the 1-ring median-filtered measured inverse
-// depths, so that object boundaries are cut while single outliers (removed by
-// the median) stay connected and are repaired. Gradients start from a weighted
-// least-squares plane fit over each vertex's 1-ring. Piecewise-planar surfaces are flattened (affine
-// inverse depth = plane) while steps are kept. Solved with the diagonally
-// preconditioned primal-dual algorithm of Pock & Chambolle (2011).
-// Warm start: the previous call's solution is kept by track id (the relative
-// correction xi/z and the gradient) together with the edge duals.
+// with r_ij the relative residual of each end's 1-ring plane fit (least squares
+// on the 1-ring median-filtered measured inverse depths) predicting the other
+// end: creases and slanted planes stay connected, object boundaries are cut, and
+// single outliers (removed by the median) stay connected and are repaired.
+// Gradients start from that plane fit. Piecewise-planar surfaces are flattened
+// (affine inverse depth = plane) while steps are kept. Solved with the
+// diagonally preconditioned primal-dual algorithm of Pock & Chambolle (2011).
+// Warm start by track id: the edge duals, and optionally (warm_start_primal)
+// the previous relative correction xi/z and gradient (the camera moved, so the
+// previous inverse depths themselves are not reusable).
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -28,11 +30,12 @@ struct NltgvConfig {
   double beta = 0.1;          // weight of the gradient smoothness term (normalized-coordinate units)
   double lambda = 1.0;        // weight of the L1 data term
   int iterations = 200;       // primal-dual iterations (cold start)
-  int warm_iterations = 80;   // iterations when most vertices were warm-started
+  int warm_iterations = 120;  // iterations when most vertices were warm-started
   double theta = 1.0;         // over-relaxation
   double support_sigma = 0.05;  // relative inverse-depth jump scale of the support weights (0: all 1)
   double min_support = 0.02;    // floor of the support weights
-  bool warm_start = true;
+  bool warm_start = true;        // keep the solution by track id for the next call
+  bool warm_start_primal = false; // also start from the previous inverse depths/gradients (else only the duals)
   void validate() const;      // throws std::invalid_argument naming the key
 };
 
