@@ -2,7 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
-#include <unordered_set>
+#include <algorithm>
 
 namespace vitamin_e::map {
 
@@ -15,6 +15,7 @@ void MapConfig::validate() const {
 Map::Map(const MapConfig& config) : config_(config) { config_.validate(); }
 
 void Map::clear() {
+  orphans_.clear();
   landmarks_.clear();
   keyframes_.clear();
 }
@@ -31,9 +32,17 @@ const Landmark* Map::landmark(std::uint64_t id) const {
 
 Landmark& Map::addLandmark(std::uint64_t id, const Eigen::Vector3d& p_w, std::uint8_t intensity) {
   Landmark& l = landmarks_[id];
+  l = Landmark{};
   l.id = id;
   l.p_w = p_w;
   l.intensity = intensity;
+  for (const Keyframe& kf : keyframes_) {
+    auto it = kf.observations.find(id);
+    if (it != kf.observations.end()) {
+      l.observations.push_back({kf.frame_index, it->second});
+      ++l.num_observations;
+    }
+  }
   return l;
 }
 
@@ -41,31 +50,50 @@ void Map::removeLandmark(std::uint64_t id) { landmarks_.erase(id); }
 
 Keyframe& Map::addKeyframe(Keyframe keyframe) {
   for (const auto& obs : keyframe.observations) {
-    if (Landmark* l = landmark(obs.first)) ++l->num_observations;
+    if (Landmark* l = landmark(obs.first)) {
+      ++l->num_observations;
+      l->observations.push_back({keyframe.frame_index, obs.second});
+    }
   }
   keyframes_.push_back(std::move(keyframe));
-  bool retired = false;
   while (static_cast<int>(keyframes_.size()) > config_.max_keyframes) {
+    Keyframe oldest = std::move(keyframes_.front());
     keyframes_.pop_front();
-    retired = true;
+    retireKeyframe(oldest);
   }
-  if (retired) retireUnobservedLandmarks();
   return keyframes_.back();
 }
 
-void Map::retireUnobservedLandmarks() {
-  std::unordered_set<std::uint64_t> observed;
-  for (const Keyframe& kf : keyframes_) {
-    for (const auto& obs : kf.observations) observed.insert(obs.first);
-  }
+void Map::retireKeyframe(const Keyframe& retired) {
   const std::uint64_t oldest = keyframes_.empty() ? 0 : keyframes_.front().frame_index;
-  for (auto it = landmarks_.begin(); it != landmarks_.end();) {
-    const Landmark& l = it->second;
-    if (!observed.count(l.id) && l.last_seen_frame < oldest) {
-      archive(l);
-      it = landmarks_.erase(it);
+  // Landmarks that lost their last keyframe observation while still tracked:
+  // retire them once they are no longer seen either.
+  std::vector<std::uint64_t> still_orphans;
+  for (std::uint64_t id : orphans_) {
+    auto it = landmarks_.find(id);
+    if (it == landmarks_.end() || !it->second.observations.empty()) continue;
+    if (it->second.last_seen_frame < oldest) {
+      archive(it->second);
+      landmarks_.erase(it);
     } else {
-      ++it;
+      still_orphans.push_back(id);
+    }
+  }
+  orphans_.swap(still_orphans);
+  for (const auto& obs : retired.observations) {
+    auto it = landmarks_.find(obs.first);
+    if (it == landmarks_.end()) continue;
+    Landmark& l = it->second;
+    auto& v = l.observations;
+    v.erase(std::remove_if(v.begin(), v.end(),
+                           [&](const LandmarkObservation& o) { return o.keyframe == retired.frame_index; }),
+            v.end());
+    if (!v.empty()) continue;
+    if (l.last_seen_frame < oldest) {
+      archive(l);
+      landmarks_.erase(it);
+    } else {
+      orphans_.push_back(l.id);
     }
   }
 }

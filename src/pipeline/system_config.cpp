@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -34,6 +35,10 @@ Field field(const std::string& section, const std::string& key, T* value) {
       } else if constexpr (std::is_integral_v<T>) {
         const double d = node.as<double>();
         if (!std::isfinite(d) || std::floor(d) != d) throw std::runtime_error("not an integer");
+        if (d < static_cast<double>(std::numeric_limits<T>::lowest()) ||
+            d >= std::ldexp(1.0, std::numeric_limits<T>::digits)) {
+          throw std::runtime_error("out of range");
+        }
         *value = static_cast<T>(d);
       } else {
         const double d = node.as<double>();
@@ -155,17 +160,28 @@ SystemConfig loadSystemConfig(const std::string& yaml_path) {
   if (root.IsNull()) return config;
   if (!root.IsMap()) throw ConfigError("config file '" + yaml_path + "': expected a map of sections");
   std::vector<Field> table = fields(config);
+  // A key must be a plain scalar ("? [a, b]" would escape as a yaml-cpp exception).
+  auto key_name = [&](const YAML::Node& key) {
+    if (!key.IsScalar()) {
+      throw ConfigError(yaml_path + ": line " + std::to_string(key.Mark().line + 1) + ": a key must be a name");
+    }
+    return key.Scalar();
+  };
   for (const auto& section : root) {
-    const std::string name = section.first.as<std::string>();
+    const std::string name = key_name(section.first);
     if (!section.second.IsMap()) {
       throw ConfigError(yaml_path + ": section '" + name + "' must be a map of key: value");
     }
     for (const auto& kv : section.second) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = key_name(kv.first);
       bool found = false;
       for (Field& f : table) {
         if (f.section == name && f.key == key) {
-          f.read(kv.second);
+          try {
+            f.read(kv.second);
+          } catch (const ConfigError& e) {
+            throw ConfigError(yaml_path + ": " + e.what());  // the file, as for every other error
+          }
           found = true;
           break;
         }

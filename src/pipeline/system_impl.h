@@ -43,6 +43,8 @@ struct System::Impl {
   void localizePendingFrames();
   void recordPose(std::uint64_t frame_index, double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
   void fillResultPoints(FrameResult* result) const;
+  void refreshCurrentLandmarks();  // cur_landmarks from cur_tracks
+  void removeLandmarks(const std::vector<std::uint64_t>& ids);  // from the map and the tracker
 
   SystemConfig config;
   camera::Camera camera;
@@ -63,6 +65,7 @@ struct System::Impl {
   double cur_t = 0.0;
   std::string cur_text;
   std::vector<FrameTrack> cur_tracks;
+  std::vector<map::Landmark*> cur_landmarks;  // per cur_tracks entry, null if unmapped
   Eigen::Isometry3d T_w_cur = Eigen::Isometry3d::Identity();
 
   // motion model

@@ -20,8 +20,9 @@ double median(std::vector<double> v) {
 }  // namespace
 
 void System::Impl::track(FrameResult* result) {
-  for (const FrameTrack& t : cur_tracks) {
-    if (map::Landmark* l = map.landmark(t.id)) l->last_seen_frame = frame_index;
+  refreshCurrentLandmarks();
+  for (map::Landmark* l : cur_landmarks) {
+    if (l) l->last_seen_frame = frame_index;
   }
   std::string why;
   Eigen::Isometry3d T_w_c;
@@ -77,6 +78,7 @@ void System::Impl::track(FrameResult* result) {
     if (needKeyframe()) {
       insertKeyframe();
       triangulateNewPoints();
+      refreshCurrentLandmarks();
       bundleAdjust(true);
       T_w_cur = map.keyframes().back().T_w_c;
       T_w_last = T_w_cur;
@@ -85,8 +87,8 @@ void System::Impl::track(FrameResult* result) {
     // Median depth of the mapped points in view: the map's scale at this place.
     std::vector<double> depths;
     const Eigen::Isometry3d T_c_w = T_w_cur.inverse();
-    for (const FrameTrack& t : cur_tracks) {
-      if (const map::Landmark* l = map.landmark(t.id)) depths.push_back((T_c_w * l->p_w).z());
+    for (const map::Landmark* l : cur_landmarks) {
+      if (l) depths.push_back((T_c_w * l->p_w).z());
     }
     if (depths.size() > 20) scene_depth = std::max(1e-6, median(depths));
     const double ms = elapsedMs(t0);
@@ -102,12 +104,12 @@ void System::Impl::track(FrameResult* result) {
 bool System::Impl::estimatePose(Eigen::Isometry3d* T_w_c, std::string* why) {
   std::vector<Eigen::Vector3d> p_w;
   std::vector<Eigen::Vector2d> xy;
-  std::vector<std::uint64_t> ids;
-  for (const FrameTrack& t : cur_tracks) {
-    if (const map::Landmark* l = map.landmark(t.id)) {
+  std::vector<map::Landmark*> used;
+  for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
+    if (map::Landmark* l = cur_landmarks[i]) {
       p_w.push_back(l->p_w);
-      xy.push_back(t.xy);
-      ids.push_back(t.id);
+      xy.push_back(cur_tracks[i].xy);
+      used.push_back(l);
     }
   }
   if (static_cast<int>(p_w.size()) < config.min_pose_inliers) {
@@ -122,16 +124,12 @@ bool System::Impl::estimatePose(Eigen::Isometry3d* T_w_c, std::string* why) {
     return false;
   }
   std::vector<std::uint64_t> dropped;
-  for (std::size_t i = 0; i < ids.size(); ++i) {
-    if (i < r.inliers.size() && !r.inliers[i]) {
-      map::Landmark* l = map.landmark(ids[i]);
-      if (l && ++l->outlier_count >= config.max_outlier_count) {
-        map.removeLandmark(ids[i]);
-        dropped.push_back(ids[i]);
-      }
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    if (i < r.inliers.size() && !r.inliers[i] && ++used[i]->outlier_count >= config.max_outlier_count) {
+      dropped.push_back(used[i]->id);
     }
   }
-  if (!dropped.empty()) tracker.dropTracks(dropped);
+  removeLandmarks(dropped);
   *T_w_c = r.T_w_c;
   return true;
 }
@@ -165,44 +163,43 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
     current_cam = static_cast<int>(problem.cameras.size());
     problem.cameras.push_back(c);
   }
-  // Points: per frame, those the current frame sees; per keyframe, all in the window.
-  std::unordered_map<std::uint64_t, int> point_index;
-  std::vector<std::uint64_t> point_ids;
-  auto add_point = [&](std::uint64_t id) -> int {
-    auto it = point_index.find(id);
-    if (it != point_index.end()) return it->second;
-    const map::Landmark* l = map.landmark(id);
-    if (!l) return -1;
-    const int idx = static_cast<int>(problem.points.size());
-    problem.points.push_back({l->p_w, false});
-    point_index.emplace(id, idx);
-    point_ids.push_back(id);
-    return idx;
+  // Keyframe frame index -> camera index (the window is small).
+  auto camera_of = [&](std::uint64_t keyframe) -> int {
+    for (int k = num_kf - 1; k >= 0; --k) {
+      if (kfs[k].frame_index == keyframe) return k;
+    }
+    return -1;
   };
   auto to_px = [&](const Eigen::Vector2d& xy) {
     return Eigen::Vector2d(camera.fx() * xy.x() + camera.cx(), camera.fy() * xy.y() + camera.cy());
   };
-  if (keyframe_window) {
-    // Points seen by a free keyframe, with all their keyframe observations.
-    for (int k = first_free; k < num_kf; ++k) {
-      for (const auto& obs : kfs[k].observations) add_point(obs.first);
+  // Points: per frame, those the current frame sees; per keyframe, those the
+  // free keyframes see. Each comes with all its keyframe observations.
+  std::vector<map::Landmark*> points;
+  auto add_point = [&](map::Landmark* l) {
+    const int idx = static_cast<int>(problem.points.size());
+    problem.points.push_back({l->p_w, false});
+    points.push_back(l);
+    for (const map::LandmarkObservation& o : l->observations) {
+      const int cam = camera_of(o.keyframe);
+      if (cam >= 0) problem.observations.push_back({cam, idx, to_px(o.xy)});
     }
-    for (int k = 0; k < num_kf; ++k) {
+    return idx;
+  };
+  if (keyframe_window) {
+    std::unordered_set<std::uint64_t> added;
+    for (int k = first_free; k < num_kf; ++k) {
       for (const auto& obs : kfs[k].observations) {
-        auto it = point_index.find(obs.first);
-        if (it != point_index.end()) problem.observations.push_back({k, it->second, to_px(obs.second)});
+        map::Landmark* l = map.landmark(obs.first);
+        if (l && added.insert(obs.first).second) add_point(l);
       }
     }
   } else {
-    for (const FrameTrack& t : cur_tracks) {
-      const int p = add_point(t.id);
-      if (p >= 0) problem.observations.push_back({current_cam, p, to_px(t.xy)});
-    }
-    for (std::size_t k = 0; k < kfs.size(); ++k) {
-      for (const auto& obs : kfs[k].observations) {
-        auto it = point_index.find(obs.first);
-        if (it != point_index.end()) problem.observations.push_back({static_cast<int>(k), it->second, to_px(obs.second)});
-      }
+    for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
+      map::Landmark* l = cur_landmarks[i];
+      if (!l) continue;
+      const int p = add_point(l);
+      problem.observations.push_back({current_cam, p, to_px(cur_tracks[i].xy)});
     }
   }
   if (problem.points.empty()) return;
@@ -217,26 +214,32 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
   if (current_cam >= 0 && problem.cameras[current_cam].T_w_c.matrix().allFinite()) {
     T_w_cur = problem.cameras[current_cam].T_w_c;
   }
-  for (std::size_t i = 0; i < point_ids.size(); ++i) {
-    if (map::Landmark* l = map.landmark(point_ids[i])) {
-      if (problem.points[i].p_w.allFinite()) l->p_w = problem.points[i].p_w;
-    }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (problem.points[i].p_w.allFinite()) points[i]->p_w = problem.points[i].p_w;
   }
   // Observations far off after the optimization mark their points; repeated
   // offenders are removed from the map and their tracks dropped.
-  std::unordered_set<std::uint64_t> bad;
+  std::vector<bool> bad(points.size(), false);
   for (std::size_t o = 0; o < problem.observations.size() && o < summary.residual_px.size(); ++o) {
-    if (summary.residual_px[o] > config.max_reprojection_px) bad.insert(point_ids[problem.observations[o].point]);
+    if (summary.residual_px[o] > config.max_reprojection_px) bad[problem.observations[o].point] = true;
   }
   std::vector<std::uint64_t> dropped;
-  for (std::uint64_t id : bad) {
-    map::Landmark* l = map.landmark(id);
-    if (l && ++l->outlier_count >= config.max_outlier_count) {
-      map.removeLandmark(id);
-      dropped.push_back(id);
-    }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (bad[i] && ++points[i]->outlier_count >= config.max_outlier_count) dropped.push_back(points[i]->id);
   }
-  if (!dropped.empty()) tracker.dropTracks(dropped);
+  removeLandmarks(dropped);
+}
+
+void System::Impl::refreshCurrentLandmarks() {
+  cur_landmarks.resize(cur_tracks.size());
+  for (std::size_t i = 0; i < cur_tracks.size(); ++i) cur_landmarks[i] = map.landmark(cur_tracks[i].id);
+}
+
+void System::Impl::removeLandmarks(const std::vector<std::uint64_t>& ids) {
+  if (ids.empty()) return;
+  for (std::uint64_t id : ids) map.removeLandmark(id);
+  tracker.dropTracks(ids);
+  refreshCurrentLandmarks();
 }
 
 bool System::Impl::needKeyframe() const {
@@ -245,8 +248,9 @@ bool System::Impl::needKeyframe() const {
   const Eigen::Matrix3d R_cur_kf = (T_w_cur.inverse() * kf.T_w_c).rotation();
   std::vector<double> parallax;
   std::size_t mapped = 0;
-  for (const FrameTrack& t : cur_tracks) {
-    if (map.landmark(t.id)) ++mapped;
+  for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
+    const FrameTrack& t = cur_tracks[i];
+    if (cur_landmarks[i]) ++mapped;
     auto it = kf.observations.find(t.id);
     if (it == kf.observations.end()) continue;
     const Eigen::Vector3d f = R_cur_kf * it->second.homogeneous();
@@ -274,8 +278,9 @@ int System::Impl::triangulateNewPoints() {
   int created = 0;
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector2d> obs;
-  for (const FrameTrack& t : cur_tracks) {
-    if (map.landmark(t.id)) continue;
+  for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
+    const FrameTrack& t = cur_tracks[i];
+    if (cur_landmarks[i]) continue;
     poses.clear();
     obs.clear();
     for (const map::Keyframe& kf : kfs) {

@@ -44,13 +44,32 @@ TEST(Map, ArchiveKeepsOnePointPerVoxelAndSkipsPoorlyObserved) {
   Map map(cfg);
   for (std::uint64_t id = 0; id < 20; ++id) {
     auto& l = map.addLandmark(id, Eigen::Vector3d(0.1 * double(id % 5), 0.2, 0.3), 1);
-    l.num_observations = id < 10 ? 3 : 1;  // the last ten are poorly observed
+    l.num_observations = id < 10 ? 2 : 0;  // keyframe 5 adds one: the last ten stay poorly observed
   }
-  map.addKeyframe(keyframeSeeing(5, 1000, 1));
+  map.addKeyframe(keyframeSeeing(5, 0, 20));
   map.addKeyframe(keyframeSeeing(6, 1000, 1));
   map.addKeyframe(keyframeSeeing(7, 1000, 1));  // retires keyframe 5: all 20 landmarks unobserved
   EXPECT_TRUE(map.landmarks().empty());
   EXPECT_EQ(map.archive().size(), 1u);  // all well-observed ones fall in one 1 m voxel
+}
+
+TEST(Map, LandmarkStillTrackedIsRetiredOnceNoLongerSeen) {
+  MapConfig cfg;
+  cfg.max_keyframes = 2;
+  cfg.min_observations_to_archive = 1;
+  Map map(cfg);
+  map.addKeyframe(keyframeSeeing(0, 7, 1));
+  auto& l = map.addLandmark(7, Eigen::Vector3d(1, 2, 3), 1);
+  ASSERT_EQ(l.observations.size(), 1u);
+  l.last_seen_frame = 10;  // the track lives on without new keyframes seeing it
+  map.addKeyframe(keyframeSeeing(5, 100, 1));
+  map.addKeyframe(keyframeSeeing(8, 100, 1));  // retires keyframe 0: landmark 7 has no observation left
+  ASSERT_NE(map.landmark(7), nullptr);          // still seen at frame 10 > oldest keyframe 5
+  map.addKeyframe(keyframeSeeing(12, 100, 1));  // oldest is now 8 < 10: still seen
+  ASSERT_NE(map.landmark(7), nullptr);
+  map.addKeyframe(keyframeSeeing(20, 100, 1));  // oldest is 12 > 10: retired to the archive
+  EXPECT_EQ(map.landmark(7), nullptr);
+  EXPECT_EQ(map.archive().size(), 1u);
 }
 
 TEST(Map, RejectsBadConfig) {

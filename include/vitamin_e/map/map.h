@@ -12,6 +12,12 @@
 
 namespace vitamin_e::map {
 
+// One keyframe's view of a landmark.
+struct LandmarkObservation {
+  std::uint64_t keyframe = 0;  // frame index of the keyframe
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();  // normalized undistorted
+};
+
 struct Landmark {
   std::uint64_t id = 0;  // the track id
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
@@ -19,6 +25,7 @@ struct Landmark {
   int num_observations = 0;   // keyframes that saw it (incl. retired ones)
   std::uint64_t last_seen_frame = 0;
   int outlier_count = 0;      // times flagged by pose estimation / BA
+  std::vector<LandmarkObservation> observations;  // by the active keyframes, oldest first
 };
 
 struct Keyframe {
@@ -50,14 +57,17 @@ class Map {
 
   Landmark* landmark(std::uint64_t id);
   const Landmark* landmark(std::uint64_t id) const;
+  // Adds (or replaces) a landmark and attaches the observations the active
+  // keyframes have of its track.
   Landmark& addLandmark(std::uint64_t id, const Eigen::Vector3d& p_w, std::uint8_t intensity);
   void removeLandmark(std::uint64_t id);  // bad point: dropped, not archived
   const std::unordered_map<std::uint64_t, Landmark>& landmarks() const { return landmarks_; }
   std::unordered_map<std::uint64_t, Landmark>& landmarks() { return landmarks_; }
 
-  // Adds a keyframe; retires the oldest beyond max_keyframes. Landmarks that no
-  // active keyframe observes and that were not seen since the oldest active
-  // keyframe are archived (if well observed) and removed.
+  // Adds a keyframe (its observations are attached to the existing landmarks);
+  // retires the oldest beyond max_keyframes. Landmarks that no active keyframe
+  // observes any more and that were not seen since the oldest active keyframe
+  // are archived (if well observed) and removed.
   Keyframe& addKeyframe(Keyframe keyframe);
   const std::deque<Keyframe>& keyframes() const { return keyframes_; }
   std::deque<Keyframe>& keyframes() { return keyframes_; }
@@ -67,12 +77,13 @@ class Map {
   std::vector<ArchivedPoint> allPoints() const;
 
  private:
-  void retireUnobservedLandmarks();
+  void retireKeyframe(const Keyframe& keyframe);
   void archive(const Landmark& landmark);
 
   MapConfig config_;
   std::unordered_map<std::uint64_t, Landmark> landmarks_;
   std::deque<Keyframe> keyframes_;
+  std::vector<std::uint64_t> orphans_;  // landmarks without keyframe observations, still tracked
   std::vector<ArchivedPoint> archive_;
   std::unordered_map<std::int64_t, std::size_t> archive_voxels_;
 };
