@@ -1,0 +1,94 @@
+#pragma once
+// Internal to vitamin_e_optimization: the state and steps of the subspace Gauss-Newton solver
+// (see include/vitamin_e/optimization/subspace_gn.h for the method). Split in
+// subspace_gn.cpp (sweeps, camera and point steps) and subspace_gn_linearize.cpp (problem
+// structure, linearization, costs, per-point refinement).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <thread>
+#include <vector>
+
+#include "vitamin_e/geometry/lie.h"
+#include "vitamin_e/geometry/projection.h"
+#include "vitamin_e/optimization/block_solvers.h"
+#include "vitamin_e/optimization/subspace_gn.h"
+
+namespace vitamin_e {
+namespace optimization {
+namespace detail {
+
+using geometry::Matrix6d;
+using geometry::Vector6d;
+using Matrix63d = Eigen::Matrix<double, 6, 3>;
+
+constexpr double kMinDepth = 1e-9;
+
+// Runs f(begin, end, thread_index) over [0, n) split in `threads` contiguous chunks.
+template <typename F>
+void parallelFor(int n, int threads, F&& f) {
+  const int t = std::max(1, std::min(threads, n / 256));
+  if (t <= 1) {
+    f(0, n, 0);
+    return;
+  }
+  std::vector<std::thread> pool;
+  pool.reserve(t - 1);
+  for (int k = 1; k < t; ++k) pool.emplace_back([&, k] { f(n * k / t, n * (k + 1) / t, k); });
+  f(0, n / t, 0);
+  for (auto& th : pool) th.join();
+}
+
+class SubspaceGn {
+ public:
+  SubspaceGn(BaProblem& p, const BaOptions& o);
+  int freeCameras() const { return static_cast<int>(cams_.size()); }
+  int freePoints() const { return static_cast<int>(pts_.size()); }
+  int rejectedSteps() const { return rejected_; }
+  int activeObservations() const { return static_cast<int>(pt_obs_.size() + cam_only_obs_.size()); }
+  // Runs the sweeps; returns {sweeps, converged, lambda}.
+  void run(int* sweeps, bool* converged, double* lambda_out);
+
+ private:
+  void buildStructure();
+  // Builds all blocks at the current estimate; returns the robust cost of the active part.
+  double linearize();
+  // IRLS weight matrix of one residual (Hessian block J^T W J, gradient w J^T r, w = rho').
+  // The second-order term of Geman-McClure (rho'' < 0) is dropped, as Ceres does; using it
+  // (floored to stay positive definite) was tried and converged worse on the benchmark.
+  Eigen::Matrix2d weightMatrix(const Eigen::Vector2d&, double sq, double* w) const;
+  // Computes dc_, dp_ for the damping lambda from the current linearization.
+  void solveStep(double lambda);
+  // Eq. 12 relinearized: Gauss-Newton steps on each point alone with the cameras fixed (each
+  // point's cost only involves its own observations, so every step is checked and kept per
+  // point). Returns the total cost decrease.
+  double refinePoints(int iterations);
+  // Eq. 12: dp_j = -H_pp^-1 (g_p + sum_i H_pc dc_i), independent per point.
+  void pointUpdates();
+  void cacheCameras();
+  void saveState();
+  void restoreState();
+  void applyStep();
+  double activeCost();
+
+  BaProblem& P_;
+  const BaOptions& O_;
+  geometry::GemanMcClure kernel_;
+  geometry::Pinhole K_;
+  std::vector<int> cam_var_, pt_var_, cams_, pts_;
+  std::vector<int> pt_begin_, pt_obs_, obs_slot_, cam_only_obs_;
+  std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
+  double fixed_cost_ = 0.0;
+  int rejected_ = 0;
+  std::vector<Matrix6d> Hcc_;
+  BlockMatrix6 S_;
+  std::vector<Vector6d> gc_, b_, dc_;
+  std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, Rt_, R_;
+  std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
+  std::vector<Matrix63d> Hcp_, Y_;
+  std::vector<Eigen::Isometry3d> saved_cams_;
+};
+
+}  // namespace detail
+}  // namespace optimization
+}  // namespace vitamin_e

@@ -1,0 +1,286 @@
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "subspace_gn_impl.h"
+
+namespace vitamin_e {
+namespace optimization {
+namespace detail {
+
+void SubspaceGn::buildStructure() {
+  const int nc = static_cast<int>(P_.cameras.size());
+  const int np = static_cast<int>(P_.points.size());
+  cam_var_.assign(nc, -1);
+  pt_var_.assign(np, -1);
+  for (int c = 0; c < nc; ++c)
+    if (!P_.cameras[c].fixed) {
+      cam_var_[c] = static_cast<int>(cams_.size());
+      cams_.push_back(c);
+    }
+  // Free points: not fixed and observed at least once.
+  std::vector<int> count(np, 0);
+  for (const BaObservation& o : P_.observations) ++count[o.point];
+  for (int p = 0; p < np; ++p)
+    if (!P_.points[p].fixed && count[p] > 0) {
+      pt_var_[p] = static_cast<int>(pts_.size());
+      pts_.push_back(p);
+    }
+  const int npf = static_cast<int>(pts_.size());
+  const int ncf = static_cast<int>(cams_.size());
+  // Point-major observation lists; slots = (free camera, free point) pairs, point-major.
+  std::vector<int> per_point(npf + 1, 0);
+  for (const BaObservation& o : P_.observations) {
+    const int j = pt_var_[o.point];
+    if (j >= 0) ++per_point[j + 1];
+  }
+  for (int j = 0; j < npf; ++j) per_point[j + 1] += per_point[j];
+  pt_begin_ = per_point;
+  pt_obs_.assign(per_point[npf], -1);
+  for (size_t k = 0; k < P_.observations.size(); ++k) {
+    const BaObservation& o = P_.observations[k];
+    const int j = pt_var_[o.point];
+    if (j >= 0) {
+      pt_obs_[per_point[j]++] = static_cast<int>(k);
+    } else if (cam_var_[o.camera] >= 0) {
+      cam_only_obs_.push_back(static_cast<int>(k));
+    }
+  }
+  obs_slot_.assign(pt_obs_.size(), -1);
+  slot_begin_.assign(npf + 1, 0);
+  std::vector<int> cam_count(ncf + 1, 0);
+  for (int j = 0; j < npf; ++j) {
+    slot_begin_[j] = static_cast<int>(slot_cam_.size());
+    for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
+      const int ci = cam_var_[P_.observations[pt_obs_[a]].camera];
+      if (ci < 0) continue;
+      obs_slot_[a] = static_cast<int>(slot_cam_.size());
+      slot_cam_.push_back(ci);
+      slot_point_.push_back(j);
+      ++cam_count[ci + 1];
+    }
+  }
+  slot_begin_[npf] = static_cast<int>(slot_cam_.size());
+  for (int i = 0; i < ncf; ++i) cam_count[i + 1] += cam_count[i];
+  cam_begin_ = cam_count;
+  cam_slots_.assign(slot_cam_.size(), -1);
+  for (size_t s = 0; s < slot_cam_.size(); ++s) cam_slots_[cam_count[slot_cam_[s]]++] = static_cast<int>(s);
+
+  Hcc_.resize(ncf);
+  gc_.resize(ncf);
+  b_.resize(ncf);
+  dc_.resize(ncf);
+  Hpp_.resize(npf);
+  gp_.resize(npf);
+  Hpp_inv_.resize(npf);
+  dp_.resize(npf);
+  q_.resize(npf);
+  Hcp_.resize(slot_cam_.size());
+  if (O_.use_schur) Y_.resize(slot_cam_.size());
+  // Constant cost of the observations with nothing free.
+  fixed_cost_ = 0.0;
+  Eigen::Vector2d r;
+  for (const BaObservation& o : P_.observations)
+    if (cam_var_[o.camera] < 0 && pt_var_[o.point] < 0)
+      fixed_cost_ += baResidual(P_, o, &r) ? kernel_.rho(r.squaredNorm()) : kernel_.sigma2;
+}
+
+double SubspaceGn::linearize() {
+  const int ncf = freeCameras();
+  const int npf = freePoints();
+  cacheCameras();
+  const int T = std::max(1, O_.threads);
+  std::vector<std::vector<Matrix6d>> Hcc_t(T, std::vector<Matrix6d>(ncf, Matrix6d::Zero()));
+  std::vector<std::vector<Vector6d>> gc_t(T, std::vector<Vector6d>(ncf, Vector6d::Zero()));
+  std::vector<double> cost_t(T, 0.0);
+  parallelFor(npf, T, [&](int begin, int end, int t) {
+    double cost = 0.0;
+    for (int j = begin; j < end; ++j) {
+      Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d g = Eigen::Vector3d::Zero();
+      const Eigen::Vector3d& p = P_.points[pts_[j]].p_w;
+      for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
+        const BaObservation& o = P_.observations[pt_obs_[a]];
+        const Eigen::Matrix3d& Rt = Rt_[o.camera];
+        const Eigen::Vector3d p_c = Rt * (p - t_[o.camera]);
+        const int s = obs_slot_[a];
+        if (p_c.z() <= kMinDepth) {
+          cost += kernel_.sigma2;
+          if (s >= 0) Hcp_[s].setZero();
+          continue;
+        }
+        const Eigen::Vector2d r = o.uv - K_.project(p_c);
+        const double sq = r.squaredNorm();
+        cost += kernel_.rho(sq);
+        double w;
+        const Eigen::Matrix2d W = weightMatrix(r, sq, &w);
+        geometry::Matrix23d Jp;
+        geometry::Matrix26d Jc;
+        geometry::reprojectionJacobians(K_, p_c, R_[o.camera], s >= 0 ? &Jc : nullptr, &Jp);
+        const Eigen::Matrix<double, 3, 2> JpTW = Jp.transpose() * W;
+        H.noalias() += JpTW * Jp;
+        g.noalias() += w * (Jp.transpose() * r);
+        if (s >= 0) {
+          const Eigen::Matrix<double, 6, 2> JcTW = Jc.transpose() * W;
+          const int ci = slot_cam_[s];
+          Hcc_t[t][ci].noalias() += JcTW * Jc;
+          gc_t[t][ci].noalias() += w * (Jc.transpose() * r);
+          Hcp_[s].noalias() = JcTW * Jp;
+        }
+      }
+      Hpp_[j] = H;
+      gp_[j] = g;
+    }
+    cost_t[t] = cost;
+  });
+  double cost = 0.0;
+  for (int t = 0; t < T; ++t) cost += cost_t[t];
+  for (int i = 0; i < ncf; ++i) {
+    Hcc_[i].setZero();
+    gc_[i].setZero();
+    for (int t = 0; t < T; ++t) {
+      Hcc_[i] += Hcc_t[t][i];
+      gc_[i] += gc_t[t][i];
+    }
+  }
+  // Free cameras observing fixed points.
+  for (int k : cam_only_obs_) {
+    const BaObservation& o = P_.observations[k];
+    const int ci = cam_var_[o.camera];
+    const Eigen::Vector3d p_c = Rt_[o.camera] * (P_.points[o.point].p_w - t_[o.camera]);
+    if (p_c.z() <= kMinDepth) {
+      cost += kernel_.sigma2;
+      continue;
+    }
+    const Eigen::Vector2d r = o.uv - K_.project(p_c);
+    const double sq = r.squaredNorm();
+    cost += kernel_.rho(sq);
+    double w;
+    const Eigen::Matrix2d W = weightMatrix(r, sq, &w);
+    geometry::Matrix26d Jc;
+    geometry::reprojectionJacobians(K_, p_c, R_[o.camera], &Jc, nullptr);
+    Hcc_[ci].noalias() += Jc.transpose() * W * Jc;
+    gc_[ci].noalias() += w * (Jc.transpose() * r);
+  }
+  return cost;
+}
+
+Eigen::Matrix2d SubspaceGn::weightMatrix(const Eigen::Vector2d&, double sq, double* w) const {
+  *w = kernel_.weight(sq);
+  return *w * Eigen::Matrix2d::Identity();
+}
+
+double SubspaceGn::refinePoints(int iterations) {
+  cacheCameras();
+  const int T = std::max(1, O_.threads);
+  std::vector<double> gain_t(T, 0.0);
+  parallelFor(freePoints(), T, [&](int begin, int end, int t) {
+    for (int j = begin; j < end; ++j) {
+      Eigen::Vector3d p = P_.points[pts_[j]].p_w;
+      auto eval = [&](const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) {
+        double c = 0.0;
+        if (H) H->setZero(), g->setZero();
+        for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
+          const BaObservation& o = P_.observations[pt_obs_[a]];
+          const Eigen::Vector3d p_c = Rt_[o.camera] * (x - t_[o.camera]);
+          if (p_c.z() <= kMinDepth) {
+            c += kernel_.sigma2;
+            continue;
+          }
+          const Eigen::Vector2d r = o.uv - K_.project(p_c);
+          const double sq = r.squaredNorm();
+          c += kernel_.rho(sq);
+          if (!H) continue;
+          geometry::Matrix23d Jp;
+          geometry::reprojectionJacobians(K_, p_c, R_[o.camera], nullptr, &Jp);
+          const double w = kernel_.weight(sq);
+          H->noalias() += w * Jp.transpose() * Jp;
+          g->noalias() += w * Jp.transpose() * r;
+        }
+        return c;
+      };
+      double lambda = O_.initial_lambda;
+      Eigen::Matrix3d H;
+      Eigen::Vector3d g;
+      for (int it = 0; it < iterations; ++it) {
+        const double c0 = eval(p, &H, &g);
+        bool improved = false;
+        for (int attempt = 0; attempt < 3 && !improved; ++attempt) {
+          Eigen::Matrix3d Hd = H;
+          Hd.diagonal() = Hd.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
+          const Eigen::Vector3d dp = -(Hd.inverse() * g);
+          const double c1 = eval(p + dp, nullptr, nullptr);
+          if (c1 < c0) {
+            p += dp;
+            gain_t[t] += c0 - c1;
+            lambda *= 0.3;
+            improved = true;
+          } else {
+            lambda *= 10.0;
+          }
+        }
+        if (!improved) break;
+      }
+      P_.points[pts_[j]].p_w = p;
+    }
+  });
+  double gain = 0.0;
+  for (double v : gain_t) gain += v;
+  return gain;
+}
+
+void SubspaceGn::cacheCameras() {
+  const size_t nc = P_.cameras.size();
+  Rt_.resize(nc);
+  R_.resize(nc);
+  t_.resize(nc);
+  for (size_t c = 0; c < nc; ++c) {
+    R_[c] = P_.cameras[c].T_w_c.linear();
+    Rt_[c] = R_[c].transpose();
+    t_[c] = P_.cameras[c].T_w_c.translation();
+  }
+}
+
+void SubspaceGn::saveState() {
+  saved_cams_.resize(cams_.size());
+  saved_pts_.resize(pts_.size());
+  for (size_t i = 0; i < cams_.size(); ++i) saved_cams_[i] = P_.cameras[cams_[i]].T_w_c;
+  for (size_t j = 0; j < pts_.size(); ++j) saved_pts_[j] = P_.points[pts_[j]].p_w;
+}
+
+void SubspaceGn::restoreState() {
+  for (size_t i = 0; i < cams_.size(); ++i) P_.cameras[cams_[i]].T_w_c = saved_cams_[i];
+  for (size_t j = 0; j < pts_.size(); ++j) P_.points[pts_[j]].p_w = saved_pts_[j];
+}
+
+void SubspaceGn::applyStep() {
+  for (size_t i = 0; i < cams_.size(); ++i) {
+    Eigen::Isometry3d& T = P_.cameras[cams_[i]].T_w_c;
+    T = geometry::normalizedIsometry(T * geometry::expSE3(dc_[i]));
+  }
+  for (size_t j = 0; j < pts_.size(); ++j) P_.points[pts_[j]].p_w += dp_[j];
+}
+
+double SubspaceGn::activeCost() {
+  cacheCameras();
+  const int T = std::max(1, O_.threads);
+  std::vector<double> cost_t(T, 0.0);
+  auto term = [&](const BaObservation& o) {
+    const Eigen::Vector3d p_c = Rt_[o.camera] * (P_.points[o.point].p_w - t_[o.camera]);
+    if (p_c.z() <= kMinDepth) return kernel_.sigma2;
+    return kernel_.rho((o.uv - K_.project(p_c)).squaredNorm());
+  };
+  parallelFor(static_cast<int>(pt_obs_.size()), T, [&](int begin, int end, int t) {
+    double c = 0.0;
+    for (int a = begin; a < end; ++a) c += term(P_.observations[pt_obs_[a]]);
+    cost_t[t] = c;
+  });
+  double cost = 0.0;
+  for (double c : cost_t) cost += c;
+  for (int k : cam_only_obs_) cost += term(P_.observations[k]);
+  return cost;
+}
+
+}  // namespace detail
+
+}  // namespace optimization
+}  // namespace vitamin_e
