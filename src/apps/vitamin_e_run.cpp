@@ -45,6 +45,7 @@ const char* kUsage =
     "  --max-frames N   process at most N frames\n"
     "  --start-frame N  skip the first N frames\n"
     "  --quiet          no progress and no summary\n"
+    "  --print-config   print every SLAM parameter in force (defaults + --config) and exit\n"
     "  --check          no SLAM: read every frame and print 'index timestamp WxH mean' lines\n"
     "                   on stdout (a dataset check; --out is not needed)\n";
 
@@ -71,6 +72,7 @@ struct Options {
   std::size_t start_frame = 0;
   bool quiet = false;
   bool check = false;
+  bool print_config = false;
 };
 
 std::size_t parseCount(const std::string& key, const std::string& v) {
@@ -100,6 +102,10 @@ Options parseArgs(int argc, char** argv) {
       o.check = true;
       continue;
     }
+    if (a == "--print-config") {
+      o.print_config = true;
+      continue;
+    }
     if (i + 1 >= argc) fail(a.rfind("--", 0) == 0 ? a + " needs a value" : "unexpected argument '" + a + "'");
     const std::string v = argv[++i];
     if (a == "--dataset") o.dataset = v;
@@ -111,6 +117,7 @@ Options parseArgs(int argc, char** argv) {
     else if (a == "--start-frame") o.start_frame = parseCount(a, v);
     else fail("unknown option '" + a + "' (see --help)");
   }
+  if (o.print_config) return o;
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
   if (o.out.empty() && !o.check) fail("--out DIR is required (see --help)");
   return o;
@@ -194,6 +201,10 @@ int checkFrames(const io::Dataset& dataset, std::size_t begin, std::size_t end) 
 
 int run(const Options& o) {
   const pl::SystemConfig config = o.check ? pl::SystemConfig{} : loadConfig(o.config);
+  if (o.print_config) {
+    std::cout << config.describe();
+    return 0;
+  }
   const std::unique_ptr<io::Dataset> dataset = openInput(o);
   if (o.start_frame >= dataset->size()) {
     fail("--start-frame " + std::to_string(o.start_frame) + " is past the end of '" + o.dataset + "' (" +
@@ -250,6 +261,9 @@ int run(const Options& o) {
   stats.interrupted = g_stop != 0;
   stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
   stats.init_retries = slam.initRetries();
+  // Frames seen while initializing are localized once the map exists: the
+  // system's count (= trajectory poses) is the number of tracked frames.
+  stats.tracked_frames = slam.framesTracked();
 
   std::string err;
   const std::vector<pl::MapPoint3> points = slam.mapPoints();
