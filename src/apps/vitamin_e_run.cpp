@@ -21,6 +21,7 @@
 
 #include "vitamin_e/io/dataset.h"
 #include "vitamin_e/io/run_report.h"
+#include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/pipeline/system.h"
 #ifdef VITAMIN_E_WITH_ROS
 #include "vitamin_e/ros/bag_dataset.h"
@@ -229,6 +230,13 @@ int run(const Options& o) {
     std::fprintf(stderr, "[vitamin_e_run] camera (%s): %s\n", calib.format.c_str(), calib.camera.describe().c_str());
   }
   pl::System slam(config, calib.camera);
+  std::unique_ptr<vitamin_e::fusion::DenseMapper> dense;
+  if (config.dense_enabled) {
+    dense = std::make_unique<vitamin_e::fusion::DenseMapper>(
+        config.dense, vitamin_e::meshing::pinholeIntrinsicsOf(calib.camera));
+  }
+  std::vector<std::uint64_t> dense_ids;
+  std::vector<Eigen::Vector3d> dense_points;
 
   io::RunStats stats;
   stats.dataset = o.dataset;
@@ -254,6 +262,12 @@ int run(const Options& o) {
     const double total_ms = vitamin_e::elapsedMs(t0);
     std::vector<std::pair<std::string, double>> stages(r.timing_ms.begin(), r.timing_ms.end());
     stages.emplace_back("image_load", load_ms);
+    if (dense) {
+      // Per-frame mesh + NLTGV here; TSDF fusion runs on the mapper's own thread.
+      pl::framePointsInCamera(r, &dense_ids, &dense_points);
+      const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
+      if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
+    }
     stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
     progress.update(attempted, stats.tracked_frames);
   }
@@ -270,6 +284,8 @@ int run(const Options& o) {
   stats.map_points = points.size();
   bool ok = pl::saveTrajectoryTum(slam.trajectory(), traj_path, &err);
   if (ok) ok = pl::saveMapPly(points, ply_path, &err);
+  const std::string mesh_path = (fs::path(o.out) / "mesh.ply").string();
+  if (ok && dense) ok = dense->saveMesh(mesh_path, &err);
   stats.peak_rss_mb = io::peakRssMb();
   if (ok) ok = io::writeRunStats(stats, stats_path, &err);
   if (!ok) fail(err);
@@ -280,8 +296,9 @@ int run(const Options& o) {
                  stats.frames, stats.tracked_frames, 100.0 * stats.successRate(), stats.skipped_frames,
                  stats.init_retries, stats.map_points);
     std::fprintf(stderr, "%s", io::timingTable(stats.timing).c_str());
-    std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s (peak RSS %.0f MB)\n", traj_path.c_str(),
-                 stats_path.c_str(), ply_path.c_str(), stats.peak_rss_mb);
+    std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s%s%s (peak RSS %.0f MB)\n", traj_path.c_str(),
+                 stats_path.c_str(), ply_path.c_str(), dense ? ", " : "", dense ? mesh_path.c_str() : "",
+                 stats.peak_rss_mb);
   }
   if (stats.frames == 0 && !stats.interrupted) {
     fail("no frame of '" + o.dataset + "' could be read (" + std::to_string(stats.skipped_frames) + " skipped)");

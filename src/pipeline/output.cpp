@@ -17,6 +17,21 @@ const char* toString(TrackingState state) {
   return "unknown";
 }
 
+void framePointsInCamera(const FrameResult& result, std::vector<std::uint64_t>* ids,
+                         std::vector<Eigen::Vector3d>* p_c) {
+  ids->clear();
+  p_c->clear();
+  if (!result.pose_valid) return;
+  const Eigen::Isometry3d T_c_w = result.T_w_c.inverse();
+  for (const FramePoint& p : result.points) {
+    if (!p.has_position) continue;
+    const Eigen::Vector3d q = T_c_w * p.p_w;
+    if (!q.allFinite() || q.z() <= 0.0) continue;
+    ids->push_back(p.track_id);
+    p_c->push_back(q);
+  }
+}
+
 namespace {
 bool fail(std::string* error, const std::string& message) {
   if (error) *error = message;

@@ -35,6 +35,7 @@ Field field(const std::string& section, const std::string& key, T* value) {
       } else if constexpr (std::is_integral_v<T>) {
         const double d = node.as<double>();
         if (!std::isfinite(d) || std::floor(d) != d) throw std::runtime_error("not an integer");
+        if (std::is_unsigned_v<T> && d < 0) throw std::runtime_error("must not be negative");
         if (d < static_cast<double>(std::numeric_limits<T>::lowest()) ||
             d >= std::ldexp(1.0, std::numeric_limits<T>::digits)) {
           throw std::runtime_error("out of range");
@@ -107,6 +108,27 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("map", "archive_voxel_m", &m.archive_voxel_m));
   f.push_back(field("map", "max_archive_points", &m.max_archive_points));
   f.push_back(field("map", "min_observations_to_archive", &m.min_observations_to_archive));
+  // dense reconstruction (map units)
+  auto& d = c.dense;
+  f.push_back(field("dense", "enabled", &c.dense_enabled));
+  f.push_back(field("dense", "denoise", &d.denoise));
+  f.push_back(field("dense", "min_points", &d.min_points));
+  f.push_back(field("dense", "max_edge_px", &d.mesher.max_edge_px));
+  f.push_back(field("dense", "max_normal_angle_deg", &d.mesher.max_normal_angle_deg));
+  f.push_back(field("dense", "max_inv_depth_jump", &d.mesher.max_inv_depth_jump));
+  f.push_back(field("dense", "nltgv_iterations", &d.nltgv.iterations));
+  f.push_back(field("dense", "nltgv_warm_iterations", &d.nltgv.warm_iterations));
+  f.push_back(field("dense", "nltgv_lambda", &d.nltgv.lambda));
+  f.push_back(field("dense", "voxel_size", &d.integrator.tsdf.voxel_size));
+  f.push_back(field("dense", "truncation", &d.integrator.tsdf.truncation));
+  f.push_back(field("dense", "max_weight", &d.integrator.tsdf.max_weight));
+  f.push_back(field("dense", "min_depth", &d.integrator.tsdf.min_depth));
+  f.push_back(field("dense", "max_depth", &d.integrator.tsdf.max_depth));
+  f.push_back(field("dense", "min_extract_weight", &d.integrator.tsdf.min_extract_weight));
+  f.push_back(field("dense", "raster_downscale", &d.integrator.tsdf.raster_downscale));
+  f.push_back(field("dense", "asynchronous", &d.integrator.asynchronous));
+  f.push_back(field("dense", "queue_capacity", &d.integrator.queue_capacity));
+  f.push_back(field("dense", "block_when_full", &d.integrator.block_when_full));
   // pipeline
   f.push_back(field("pipeline", "min_init_tracks", &c.min_init_tracks));
   f.push_back(field("pipeline", "init_min_disparity_px", &c.init_min_disparity_px));
@@ -146,6 +168,18 @@ std::vector<Field> fields(SystemConfig& c) {
 }
 
 }  // namespace
+
+fusion::DenseMapperConfig defaultDenseConfig() {
+  fusion::DenseMapperConfig d;
+  d.integrator.tsdf.voxel_size = 0.02;
+  d.integrator.tsdf.truncation = 0.06;
+  d.integrator.tsdf.min_depth = 0.05;
+  d.integrator.tsdf.max_depth = 10.0;
+  d.mesher.min_depth = 0.05;
+  d.mesher.max_depth = 10.0;
+  d.integrator.block_when_full = true;  // offline: fuse every frame
+  return d;
+}
 
 SystemConfig loadSystemConfig(const std::string& yaml_path) {
   YAML::Node root;
@@ -207,6 +241,7 @@ void SystemConfig::validate() const {
     pnp.validate();
     triangulation.validate();
     ba.validate();
+    dense.validate();
     map.validate();
   } catch (const ConfigError&) {
     throw;

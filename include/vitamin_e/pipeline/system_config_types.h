@@ -3,6 +3,7 @@
 // Config struct; the pipeline's own parameters follow, with their defaults.
 #include <string>
 
+#include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/geometry/pnp.h"
 #include "vitamin_e/geometry/triangulation.h"
 #include "vitamin_e/geometry/two_view.h"
@@ -12,6 +13,10 @@
 
 namespace vitamin_e::pipeline {
 
+// Dense reconstruction defaults for a monocular map, whose unit is the median
+// scene depth at initialization (voxels of 2% of it, truncation 3 voxels).
+fusion::DenseMapperConfig defaultDenseConfig();
+
 struct SystemConfig {
   tracking::TrackerConfig tracker;            // yaml section "tracker"
   geometry::TwoViewConfig init;               // yaml section "init"
@@ -19,6 +24,10 @@ struct SystemConfig {
   geometry::TriangulationConfig triangulation;  // yaml section "triangulation"
   optimization::BaOptions ba;                 // yaml section "ba"
   map::MapConfig map;                         // yaml section "map"
+  // Dense reconstruction (yaml section "dense"): run by the offline runner and
+  // the ROS meshing nodelet on the system's per-frame points, not by System.
+  bool dense_enabled = true;
+  fusion::DenseMapperConfig dense = defaultDenseConfig();
 
   // --- pipeline (yaml section "pipeline") ---
   int min_init_tracks = 200;            // tracks shared with the reference frame needed to try initializing

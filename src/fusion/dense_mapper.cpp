@@ -1,0 +1,69 @@
+#include "vitamin_e/fusion/dense_mapper.h"
+
+#include <chrono>
+#include <stdexcept>
+
+namespace vitamin_e::fusion {
+
+namespace {
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+void DenseMapperConfig::validate() const {
+  mesher.validate();
+  nltgv.validate();
+  integrator.validate();
+  if (min_points < 3) throw std::invalid_argument("dense.min_points must be >= 3");
+}
+
+DenseMapper::DenseMapper(const DenseMapperConfig& config, const meshing::PinholeIntrinsics& K)
+    : config_(config), K_(K), mesher_(config.mesher), denoiser_(config.nltgv) {
+  config_.validate();
+  K_.validate();
+  integrator_ = std::make_unique<TsdfIntegrator>(config_.integrator);
+}
+
+DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
+                                      const Eigen::Isometry3d& T_w_c) {
+  DenseFrameStats stats;
+  if (ids.size() != p_c.size()) throw std::invalid_argument("DenseMapper::addFrame: ids and points differ in size");
+  if (static_cast<int>(p_c.size()) < config_.min_points || !T_w_c.matrix().allFinite()) return stats;
+  auto t0 = std::chrono::steady_clock::now();
+  meshing::FrameMesh mesh = mesher_.buildFromPoints(ids, p_c, K_);
+  stats.mesh_ms = msSince(t0);
+  if (config_.denoise && !mesh.triangles.empty()) {
+    t0 = std::chrono::steady_clock::now();
+    denoiser_.denoise(&mesh, K_);
+    mesher_.prune(&mesh, K_);  // smoothing can open new depth jumps or flip triangles
+    stats.denoise_ms = msSince(t0);
+  }
+  stats.vertices = mesh.vertices.size();
+  stats.triangles = mesh.triangles.size();
+  if (mesh.triangles.empty()) return stats;
+  integrator_->submit(std::move(mesh), T_w_c, K_);
+  stats.integrated = true;
+  return stats;
+}
+
+void DenseMapper::flush() { integrator_->flush(); }
+
+TriangleMesh DenseMapper::extractMesh() {
+  integrator_->flush();
+  return integrator_->extractMesh();
+}
+
+bool DenseMapper::saveMesh(const std::string& path, std::string* error) {
+  integrator_->flush();
+  return integrator_->saveMesh(path, error);
+}
+
+TsdfIntegratorStats DenseMapper::integratorStats() const { return integrator_->stats(); }
+
+void DenseMapper::reset() {
+  integrator_->reset();
+  denoiser_.reset();
+}
+
+}  // namespace vitamin_e::fusion
