@@ -53,7 +53,7 @@ void SubspaceGn::run(int* sweeps, bool* converged, double* lambda_out) {
       new_cost = activeCost();
       if (new_cost < cost) {
         accepted = true;
-        lambda = std::max(lambda * 0.3, 1e-12);
+        lambda = std::max(lambda * 0.7, 1e-12);  // slow decrease: fewer rejected steps under GM
         break;
       }
       restoreState();
