@@ -46,6 +46,7 @@ const char* kUsage =
     "  --max-frames N   process at most N frames\n"
     "  --start-frame N  skip the first N frames\n"
     "  --quiet          no progress and no summary\n"
+    "  --log-frames     print one line per frame on stdout: index, time, state, tracks, mapped, ms, message\n"
     "  --print-config   print every SLAM parameter in force (defaults + --config) and exit\n"
     "  --check          no SLAM: read every frame and print 'index timestamp WxH mean' lines\n"
     "                   on stdout (a dataset check; --out is not needed)\n";
@@ -74,6 +75,7 @@ struct Options {
   bool quiet = false;
   bool check = false;
   bool print_config = false;
+  bool log_frames = false;
 };
 
 std::size_t parseCount(const std::string& key, const std::string& v) {
@@ -101,6 +103,10 @@ Options parseArgs(int argc, char** argv) {
     }
     if (a == "--check") {
       o.check = true;
+      continue;
+    }
+    if (a == "--log-frames") {
+      o.log_frames = true;
       continue;
     }
     if (a == "--print-config") {
@@ -267,6 +273,10 @@ int run(const Options& o) {
       pl::framePointsInCamera(r, &dense_ids, &dense_points);
       const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
       if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
+    }
+    if (o.log_frames) {
+      std::printf("%zu %s %s %zu %zu %.1f %s\n", i, dataset->timestampText(i).c_str(), pl::toString(r.state),
+                  r.num_tracked, r.num_mapped, total_ms, r.message.c_str());
     }
     stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
     progress.update(attempted, stats.tracked_frames);
