@@ -21,6 +21,12 @@ double median(std::vector<double> v) {
 
 void System::Impl::track(FrameResult* result) {
   refreshCurrentLandmarks();
+  // Most map points of the previous frame gone at once (a cut, a sudden flip, a
+  // covered lens): the few tracks left are not trusted for a pose.
+  std::size_t seen_before = 0, seen_now = 0;
+  for (const auto& kv : map.landmarks()) seen_before += kv.second.last_seen_frame + 1 == frame_index ? 1 : 0;
+  for (map::Landmark* l : cur_landmarks) seen_now += l ? 1 : 0;
+  const bool vanished = seen_before >= 100 && seen_now * 5 < seen_before;
   for (map::Landmark* l : cur_landmarks) {
     if (l) l->last_seen_frame = frame_index;
   }
@@ -28,7 +34,11 @@ void System::Impl::track(FrameResult* result) {
   Eigen::Isometry3d T_w_c;
   {
     const auto t0 = std::chrono::steady_clock::now();
-    const bool ok = estimatePose(&T_w_c, &why);
+    if (vanished) {
+      why = "only " + std::to_string(seen_now) + " of the " + std::to_string(seen_before) +
+            " map points of the previous frame are still tracked";
+    }
+    const bool ok = !vanished && estimatePose(&T_w_c, &why);
     const double ms = elapsedMs(t0);
     timings.add("pose", ms);
     result->timing_ms["pose"] = ms;
