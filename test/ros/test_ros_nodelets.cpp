@@ -2,6 +2,7 @@
 //   Pipeline.*   (pipeline.test)    bag -> tracking + meshing nodelets in one manager
 //   TwoProcess.* (two_process.test) tracking_node and tsdf_meshing_node, two processes
 //   BadInput.*   (bad_input.test)   wrong encoding / size / stamp: errors logged, no crash
+#include <cmath>
 #include <fstream>
 #include <memory>
 
@@ -212,6 +213,47 @@ TEST_F(BadInput, ErrorsLoggedNoCrash) {
 
   image_pub_.publish(image(5.0, "mono8", 160, 120, 1));  // still alive, still processing
   EXPECT_TRUE(processed(n0 + 2)) << "the tracker stopped processing after bad input";
+}
+
+// (c, issue 7) The rest of the encoding matrix (bgr8 and mono16 converted, bayer
+// rejected by name), a repeated stamp, and a stamp of wall-clock size after
+// bag-sized ones: only the order of stamps matters.
+TEST_F(BadInput, MoreEncodingsAndStamps) {
+  Watcher<vitamin_e::TrackingStatus> status(nh_, "/tracking/status", 1000);
+  Watcher<rosgraph_msgs::Log> rosout(nh_, "/rosout", 1000);
+  ASSERT_TRUE(status.waitForPublisher(30.0));
+  ASSERT_TRUE(rosout.waitForPublisher(30.0));
+  const auto deadline = ros::WallTime::now() + ros::WallDuration(30.0);
+  while (image_pub_.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.02).sleep();
+  ASSERT_GT(image_pub_.getNumSubscribers(), 0u);
+  auto processed = [&](std::size_t n) {
+    return status.waitFor([n](const Statuses& s) { return framesProcessed(s) >= n; }, 20.0);
+  };
+  bool first = false;
+  for (int attempt = 0; attempt < 50 && !first; ++attempt) {
+    image_pub_.publish(image(20.0 + 0.001 * attempt, "mono8", 160, 120, 1));
+    first = status.waitFor([](const Statuses& s) { return !s.empty(); }, 0.2);
+  }
+  ASSERT_TRUE(first) << "the tracker never processed a valid frame";
+  const std::size_t n0 = framesProcessed(status.messages());
+
+  image_pub_.publish(image(21.0, "bgr8", 160, 120, 3));
+  EXPECT_TRUE(processed(n0 + 1)) << "bgr8 frame not processed";
+  image_pub_.publish(image(22.0, "mono16", 160, 120, 2));
+  EXPECT_TRUE(processed(n0 + 2)) << "mono16 frame not processed";
+
+  ros::WallDuration(2.2).sleep();  // the errors are throttled per call site (2 s)
+  image_pub_.publish(image(23.0, "bayer_rggb8", 160, 120, 1));
+  EXPECT_TRUE(vitamin_e_test::waitForLogError(rosout, "unsupported image encoding 'bayer_rggb8'", 10.0));
+  image_pub_.publish(image(22.0, "mono8", 160, 120, 1));  // the same stamp as the mono16 frame
+  EXPECT_TRUE(vitamin_e_test::waitForLogError(rosout, "does not increase", 10.0));
+
+  image_pub_.publish(image(1.8e9, "mono8", 160, 120, 1));  // wall-clock-sized stamp
+  EXPECT_TRUE(processed(n0 + 3)) << "a frame with a wall-clock stamp after bag stamps was not processed";
+  for (const auto& s : status.messages()) {
+    EXPECT_TRUE(std::isfinite(s->ms_per_frame));
+    EXPECT_LE(s->frames_tracked, s->frames_processed);
+  }
 }
 
 int main(int argc, char** argv) {
