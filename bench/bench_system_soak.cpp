@@ -1,0 +1,230 @@
+// Soak test of the SLAM system (issue 7): the project's synthetic room at low
+// resolution, rendered in-process frame after frame along the figure-eight path
+// (no PNGs), fed to pipeline::System for a given wall-clock time. Samples the
+// resident memory (/proc/self/statm) every N frames, prints the curve and a
+// verdict: is memory flat after warm-up (slope over the second half)?
+//   bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]
+//                     [--archive-voxel V] [--max-frames F] [--seed S]
+// Run by ./scripts/bench_soak.sh (not part of the tests). Last line: JSON.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "vitamin_e/pipeline/system.h"
+#include "vitamin_e/synth/camera_path.h"
+#include "vitamin_e/synth/renderer.h"
+#include "vitamin_e/synth/scene.h"
+#include "vitamin_e/synth/sequence.h"
+
+namespace ve = vitamin_e;
+
+namespace {
+
+double rssMb() {
+  std::ifstream statm("/proc/self/statm");
+  long size = 0, resident = 0;
+  if (!(statm >> size >> resident)) return 0.0;
+  return static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+struct Sample {
+  std::uint64_t frame = 0;
+  double wall_min = 0.0;
+  double seq_min = 0.0;
+  double rss_mb = 0.0;
+  std::size_t map_points = 0;
+  std::size_t trajectory = 0;
+  int init_retries = 0;
+  double ms_per_frame = 0.0;  // mean since the previous sample
+};
+
+// Least-squares slope of y over x.
+double slope(const std::vector<double>& x, const std::vector<double>& y) {
+  const std::size_t n = x.size();
+  if (n < 2) return 0.0;
+  double mx = 0, my = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    mx += x[i];
+    my += y[i];
+  }
+  mx /= n;
+  my /= n;
+  double sxy = 0, sxx = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+  }
+  return sxx > 0 ? sxy / sxx : 0.0;
+}
+
+[[noreturn]] void usage(const std::string& msg) {
+  std::cerr << "error: " << msg
+            << "\nusage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]"
+               " [--archive-voxel V] [--max-frames F] [--seed S]\n";
+  std::exit(2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  double minutes = 60.0;
+  int sample_every = 200;
+  int width = 376, height = 240;
+  double archive_voxel = 0.01;
+  long long max_frames = 0;
+  std::uint64_t seed = 0;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) usage(a + " needs a value");
+    const std::string v = argv[++i];
+    try {
+      if (a == "--minutes") minutes = std::stod(v);
+      else if (a == "--sample-every") sample_every = std::stoi(v);
+      else if (a == "--width") width = std::stoi(v);
+      else if (a == "--height") height = std::stoi(v);
+      else if (a == "--archive-voxel") archive_voxel = std::stod(v);
+      else if (a == "--max-frames") max_frames = std::stoll(v);
+      else if (a == "--seed") seed = std::stoull(v);
+      else usage("unknown option '" + a + "'");
+    } catch (const std::logic_error&) {
+      usage("bad value '" + v + "' for " + a);
+    }
+  }
+  if (!(minutes > 0) || sample_every < 1 || width < 64 || height < 48 || archive_voxel < 0) usage("bad values");
+
+  // The scene is built around two laps of the path; the path is periodic in
+  // position, so boxes stay clear of it for the whole run.
+  ve::synth::SequenceConfig seq;
+  seq.width = width;
+  seq.height = height;
+  seq.seed = seed;
+  seq.noise_sigma = 1.0;
+  const ve::camera::Camera camera = ve::synth::makeSequenceCamera(width, height, true);
+  const ve::synth::CameraPath path(ve::synth::makeSequencePath(seq));
+  const double lap_s = 2.0 * M_PI / path.angularRate();
+  seq.frames = static_cast<int>(std::ceil(2.0 * lap_s * seq.rate_hz));
+  const auto t_scene = std::chrono::steady_clock::now();
+  const ve::synth::Scene scene = ve::synth::makeSequenceScene(seq, path);
+  const ve::synth::Renderer renderer(scene, camera);
+
+  // Pixel thresholds of the defaults are tuned at 752x480: scale them.
+  ve::pipeline::SystemConfig config;
+  const double s = width / 752.0;
+  config.init_min_disparity_px *= s;
+  config.keyframe_parallax_px *= s;
+  config.min_init_tracks = std::max(50, static_cast<int>(config.min_init_tracks * s));
+  config.map.archive_voxel_m = archive_voxel;
+  ve::pipeline::System system(config, camera);
+
+  std::printf("# soak: %dx%d, %.0f Hz, lap %.1f s, %.1f wall minutes, sample every %d frames, archive voxel %.3f\n",
+              width, height, seq.rate_hz, lap_s, minutes, sample_every, archive_voxel);
+  std::printf("# scene built in %.1f s; RSS at start %.1f MB\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_scene).count(), rssMb());
+  std::printf("%8s %9s %9s %9s %10s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts",
+              "traj", "retries", "ms/frame");
+  std::fflush(stdout);
+
+  std::vector<Sample> samples;
+  const auto start = std::chrono::steady_clock::now();
+  auto wallMin = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60.0; };
+  auto last_sample_time = start;
+  std::uint64_t tracked = 0, nonfinite = 0;
+  double max_step = 0.0;
+  std::uint64_t frame = 0;
+  for (;; ++frame) {
+    const double t = frame / seq.rate_hz;
+    ve::synth::RenderOptions options;
+    options.noise_sigma = seq.noise_sigma;
+    options.noise_seed = seed * 1000003 + frame;
+    const cv::Mat image = renderer.render(path.T_w_c(t), options);
+    const ve::pipeline::FrameResult r = system.process(image, 1600000000.0 + t);
+    if (r.pose_valid) {
+      ++tracked;
+      if (!r.T_w_c.matrix().allFinite()) ++nonfinite;
+    }
+    const bool done = wallMin() >= minutes || (max_frames > 0 && static_cast<long long>(frame + 1) >= max_frames);
+    if ((frame + 1) % sample_every == 0 || done) {
+      const auto now = std::chrono::steady_clock::now();
+      Sample smp;
+      smp.frame = frame + 1;
+      smp.wall_min = wallMin();
+      smp.seq_min = (frame + 1) / seq.rate_hz / 60.0;
+      smp.rss_mb = rssMb();
+      smp.map_points = system.mapPoints().size();
+      smp.trajectory = system.trajectory().size();
+      smp.init_retries = system.initRetries();
+      const std::uint64_t since = samples.empty() ? frame + 1 : frame + 1 - samples.back().frame;
+      smp.ms_per_frame = std::chrono::duration<double, std::milli>(now - last_sample_time).count() / since;
+      last_sample_time = now;
+      samples.push_back(smp);
+      std::printf("%8llu %9.2f %9.2f %9.2f %10zu %10zu %8d %9.1f\n", static_cast<unsigned long long>(smp.frame),
+                  smp.wall_min, smp.seq_min, smp.rss_mb, smp.map_points, smp.trajectory, smp.init_retries,
+                  smp.ms_per_frame);
+      std::fflush(stdout);
+    }
+    if (done) break;
+  }
+  const std::uint64_t frames = frame + 1;
+  const auto& traj = system.trajectory();
+  for (std::size_t i = 1; i < traj.size(); ++i) {
+    max_step = std::max(max_step, (traj[i].T_w_c.translation() - traj[i - 1].T_w_c.translation()).norm());
+    if (!traj[i].T_w_c.matrix().allFinite()) ++nonfinite;
+  }
+
+  // Verdict: slope of RSS over the second half of the samples (warm-up = first half),
+  // with the growth the design allows (one TrajectoryEntry per tracked frame,
+  // one archived point per new voxel) shown next to it.
+  std::vector<double> x, y, ym;
+  for (std::size_t i = samples.size() / 2; i < samples.size(); ++i) {
+    x.push_back(samples[i].wall_min);
+    y.push_back(samples[i].rss_mb);
+    ym.push_back(static_cast<double>(samples[i].map_points));
+  }
+  const double rss_slope = slope(x, y);              // MB per wall minute
+  const double points_slope = slope(x, ym);          // map points per wall minute
+  const double frames_per_min = frames / std::max(1e-9, samples.back().wall_min);
+  const double traj_mb_per_min =
+      frames_per_min * sizeof(ve::pipeline::TrajectoryEntry) / (1024.0 * 1024.0);
+  const double points_mb_per_min = points_slope * 64.0 / (1024.0 * 1024.0);  // ~64 B per point (archive + voxel index)
+  const double unexplained = rss_slope - traj_mb_per_min - std::max(0.0, points_mb_per_min);
+  const double rss_end = samples.back().rss_mb;
+  const double span_min = x.empty() ? 0.0 : x.back() - x.front();
+  // Flat: the second half grew by less than max(1 MB, 1 % of RSS).
+  const bool enough = samples.size() >= 6;
+  const double growth_mb = rss_slope * span_min;
+  const bool flat = enough && growth_mb < std::max(1.0, 0.01 * rss_end);
+  const bool explained = enough && !flat && unexplained * span_min < std::max(1.0, 0.01 * rss_end);
+  std::printf("\n# %llu frames (%.1f sequence minutes) in %.1f wall minutes, %llu tracked (%.1f %%), %d init "
+              "retries, %llu non-finite poses, largest trajectory step %.3f map units\n",
+              static_cast<unsigned long long>(frames), frames / seq.rate_hz / 60.0, samples.back().wall_min,
+              static_cast<unsigned long long>(tracked), 100.0 * tracked / frames, system.initRetries(),
+              static_cast<unsigned long long>(nonfinite), max_step);
+  std::printf("# RSS: start %.1f MB, second-half start %.1f MB, end %.1f MB; second-half slope %.3f MB/min "
+              "(trajectory growth %.3f MB/min, map points %+.0f /min ~ %.3f MB/min, unexplained %.3f MB/min)\n",
+              samples.front().rss_mb, y.empty() ? 0.0 : y.front(), rss_end, rss_slope, traj_mb_per_min,
+              points_slope, points_mb_per_min, unexplained);
+  std::printf("# verdict: %s (second half: %+.2f MB over %.1f min)\n",
+              !enough     ? "too few samples for a verdict (run longer or sample more often)"
+              : flat      ? "memory FLAT after warm-up"
+              : explained ? "memory GROWING after warm-up, as designed (trajectory + map archive, bounded by "
+                            "map.max_archive_points)"
+                          : "memory GROWING after warm-up beyond the trajectory and the map archive (leak?)",
+              growth_mb, span_min);
+  std::printf("{\"frames\": %llu, \"wall_minutes\": %.2f, \"tracked\": %llu, \"init_retries\": %d, "
+              "\"nonfinite_poses\": %llu, \"max_step\": %.4f, \"rss_start_mb\": %.1f, \"rss_end_mb\": %.1f, "
+              "\"rss_slope_mb_per_min\": %.4f, \"unexplained_mb_per_min\": %.4f, \"map_points\": %zu, \"flat\": %s, "
+              "\"growth_explained\": %s}\n",
+              static_cast<unsigned long long>(frames), samples.back().wall_min,
+              static_cast<unsigned long long>(tracked), system.initRetries(),
+              static_cast<unsigned long long>(nonfinite), max_step, samples.front().rss_mb, rss_end, rss_slope,
+              unexplained, samples.back().map_points, flat ? "true" : "false", flat || explained ? "true" : "false");
+  return nonfinite > 0 ? 1 : 0;
+}
