@@ -48,13 +48,25 @@ fi
 
 # Re-glob sources (new files in src/<module>/, tests, benchmarks) before naming targets.
 make -C "$VE_WS/build" --no-print-directory cmake_check_build_system >/dev/null
+# Compiler output goes to $VE_WS/build.log (shown on failure); VE_VERBOSE=1 shows it live.
+log="$VE_WS/build.log"
+run_make() {
+  if [ "${VE_VERBOSE:-0}" = 1 ]; then
+    make -C "$VE_WS/build" -j"$jobs" --no-print-directory "$@"
+  else
+    make -C "$VE_WS/build" -j"$jobs" --no-print-directory "$@" >>"$log" 2>&1 \
+      || { grep -E "error|Error" "$log" | head -40 >&2; ve_die "build failed (full log: $log)"; }
+  fi
+}
+: >"$log"
 if [ ${#targets[@]} -gt 0 ]; then
   for t in "${targets[@]}"; do
-    make -C "$VE_WS/build" -j"$jobs" --no-print-directory "$t"
+    run_make "$t"
   done
 else
-  make -C "$VE_WS/build" -j"$jobs" --no-print-directory
+  ve_info "building (log: $log)"
+  run_make
   if [ "$tests" = 1 ]; then
-    make -C "$VE_WS/build" -j"$jobs" --no-print-directory tests
+    run_make tests
   fi
 fi
