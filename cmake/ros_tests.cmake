@@ -1,7 +1,8 @@
 # rostests of the ROS layer (included by cmake/tests.cmake when testing is on).
 # test/ros/<name>.test.in is configured into the build tree (it names the test
 # data made at build time) and registered with add_rostest, so ctest (and
-# ./scripts/test.sh) runs it. One gtest executable serves every .test file.
+# ./scripts/test.sh) runs it. One gtest executable (test/ros/test_ros_*.cpp,
+# main() in test_ros_nodelets.cpp) serves every .test file (--gtest_filter).
 find_package(rostest REQUIRED)
 
 set(VE_TEST_DATA ${CMAKE_CURRENT_BINARY_DIR}/rostest_data)
@@ -24,9 +25,10 @@ add_custom_command(OUTPUT ${VE_TEST_DATA}/sequence.bag
   COMMENT "rostest input sequence -> ${VE_TEST_DATA}")
 add_custom_target(vitamin_e_rostest_data DEPENDS ${VE_TEST_DATA}/sequence.bag)
 
-add_executable(test_ros_nodelets EXCLUDE_FROM_ALL ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/test_ros_nodelets.cpp)
+file(GLOB _ve_rostest_srcs CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/test_ros_*.cpp)
+add_executable(test_ros_nodelets EXCLUDE_FROM_ALL ${_ve_rostest_srcs})
 target_include_directories(test_ros_nodelets PRIVATE ${VITAMIN_E_ROS_INCLUDES} ${GTEST_INCLUDE_DIRS})
-target_link_libraries(test_ros_nodelets ${GTEST_LIBRARIES} vitamin_e_eval ${catkin_LIBRARIES})
+target_link_libraries(test_ros_nodelets ${GTEST_LIBRARIES} vitamin_e_ros vitamin_e_eval ${catkin_LIBRARIES})
 add_dependencies(test_ros_nodelets ${${PROJECT_NAME}_EXPORTED_TARGETS} ${catkin_EXPORTED_TARGETS})
 add_dependencies(tests test_ros_nodelets vitamin_e_rostest_data)
 

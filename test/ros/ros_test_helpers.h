@@ -73,3 +73,14 @@ inline bool waitForLogError(Watcher<rosgraph_msgs::Log>& rosout, const std::stri
 }
 
 }  // namespace vitamin_e_test
+
+namespace vitamin_e_test {
+
+// A private parameter of the test node (string), or fallback.
+inline std::string privateParam(const std::string& name, const std::string& fallback = "") {
+  std::string value;
+  ros::NodeHandle("~").param(name, value, fallback);
+  return value;
+}
+
+}  // namespace vitamin_e_test
