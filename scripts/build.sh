@@ -47,7 +47,7 @@ if [ ! -f "$VE_WS/build/Makefile" ] || [ ! -f "$VE_WS/build/.ve_configured_$sani
 fi
 
 # Re-glob sources (new files in src/<module>/, tests, benchmarks) before naming targets.
-make -C "$VE_WS/build" --no-print-directory cmake_check_build_system >/dev/null
+make -C "$VE_WS/build" --no-print-directory cmake_check_build_system >/dev/null 2>&1 || true
 # Compiler output goes to $VE_WS/build.log (shown on failure); VE_VERBOSE=1 shows it live.
 log="$VE_WS/build.log"
 run_make() {

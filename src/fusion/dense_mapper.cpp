@@ -11,15 +11,23 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
+meshing::FrameMesherConfig lenientMesherConfig() {
+  meshing::FrameMesherConfig c;
+  c.max_inv_depth_jump = 1.0;
+  c.max_normal_angle_deg = 88.0;
+  return c;
+}
+
 void DenseMapperConfig::validate() const {
   mesher.validate();
+  prune.validate();
   nltgv.validate();
   integrator.validate();
   if (min_points < 3) throw std::invalid_argument("dense.min_points must be >= 3");
 }
 
 DenseMapper::DenseMapper(const DenseMapperConfig& config, const meshing::PinholeIntrinsics& K)
-    : config_(config), K_(K), mesher_(config.mesher), denoiser_(config.nltgv) {
+    : config_(config), K_(K), mesher_(config.mesher), pruner_(config.prune), denoiser_(config.nltgv) {
   config_.validate();
   K_.validate();
   integrator_ = std::make_unique<TsdfIntegrator>(config_.integrator);
@@ -33,10 +41,12 @@ DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, con
   auto t0 = std::chrono::steady_clock::now();
   meshing::FrameMesh mesh = mesher_.buildFromPoints(ids, p_c, K_);
   stats.mesh_ms = msSince(t0);
-  if (config_.denoise && !mesh.triangles.empty()) {
+  if (!config_.denoise) {
+    pruner_.prune(&mesh, K_);
+  } else if (!mesh.triangles.empty()) {
     t0 = std::chrono::steady_clock::now();
     denoiser_.denoise(&mesh, K_);
-    mesher_.prune(&mesh, K_);  // smoothing can open new depth jumps or flip triangles
+    pruner_.prune(&mesh, K_);  // smoothing can open new depth jumps or flip triangles
     stats.denoise_ms = msSince(t0);
   }
   stats.vertices = mesh.vertices.size();

@@ -102,6 +102,7 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("ba", "camera_gs_tolerance", &b.camera_gs_tolerance));
   f.push_back(field("ba", "initial_lambda", &b.initial_lambda));
   f.push_back(field("ba", "max_retries", &b.max_retries));
+  f.push_back(field("ba", "point_iterations", &b.point_iterations));
   // map
   auto& m = c.map;
   f.push_back(field("map", "max_keyframes", &m.max_keyframes));
@@ -113,9 +114,9 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("dense", "enabled", &c.dense_enabled));
   f.push_back(field("dense", "denoise", &d.denoise));
   f.push_back(field("dense", "min_points", &d.min_points));
-  f.push_back(field("dense", "max_edge_px", &d.mesher.max_edge_px));
-  f.push_back(field("dense", "max_normal_angle_deg", &d.mesher.max_normal_angle_deg));
-  f.push_back(field("dense", "max_inv_depth_jump", &d.mesher.max_inv_depth_jump));
+  f.push_back(field("dense", "max_edge_px", &d.prune.max_edge_px));
+  f.push_back(field("dense", "max_normal_angle_deg", &d.prune.max_normal_angle_deg));
+  f.push_back(field("dense", "max_inv_depth_jump", &d.prune.max_inv_depth_jump));
   f.push_back(field("dense", "nltgv_iterations", &d.nltgv.iterations));
   f.push_back(field("dense", "nltgv_warm_iterations", &d.nltgv.warm_iterations));
   f.push_back(field("dense", "nltgv_lambda", &d.nltgv.lambda));
@@ -175,8 +176,8 @@ fusion::DenseMapperConfig defaultDenseConfig() {
   d.integrator.tsdf.truncation = 0.06;
   d.integrator.tsdf.min_depth = 0.05;
   d.integrator.tsdf.max_depth = 10.0;
-  d.mesher.min_depth = 0.05;
-  d.mesher.max_depth = 10.0;
+  d.mesher.min_depth = d.prune.min_depth = 0.05;
+  d.mesher.max_depth = d.prune.max_depth = 10.0;
   d.integrator.block_when_full = true;  // offline: fuse every frame
   return d;
 }

@@ -20,8 +20,13 @@
 
 namespace vitamin_e::fusion {
 
+// The mesh is built with lenient filters (NLTGV needs the neighbours across
+// creases and small objects), then pruned strictly after smoothing.
+meshing::FrameMesherConfig lenientMesherConfig();
+
 struct DenseMapperConfig {
-  meshing::FrameMesherConfig mesher;
+  meshing::FrameMesherConfig mesher = lenientMesherConfig();  // building the frame mesh
+  meshing::FrameMesherConfig prune;                           // pruning after NLTGV
   meshing::NltgvConfig nltgv;
   bool denoise = true;           // NLTGV smoothing of each frame mesh before fusion
   TsdfIntegratorConfig integrator;
@@ -55,6 +60,7 @@ class DenseMapper {
   DenseMapperConfig config_;
   meshing::PinholeIntrinsics K_;
   meshing::FrameMesher mesher_;
+  meshing::FrameMesher pruner_;
   meshing::NltgvDenoiser denoiser_;
   std::unique_ptr<TsdfIntegrator> integrator_;
 };

@@ -1,0 +1,82 @@
+// DenseMapper: frame points in, fused mesh out, on a known plane.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "vitamin_e/fusion/dense_mapper.h"
+
+using namespace vitamin_e;
+
+namespace {
+meshing::PinholeIntrinsics intrinsics() {
+  meshing::PinholeIntrinsics K;
+  K.fx = K.fy = 400.0;
+  K.cx = 320.0;
+  K.cy = 240.0;
+  K.width = 640;
+  K.height = 480;
+  return K;
+}
+
+// Points on the plane z = 3 (world) seen by a camera at T_w_c looking along +z.
+void planePoints(const Eigen::Isometry3d& T_w_c, std::mt19937* rng, std::vector<std::uint64_t>* ids,
+                 std::vector<Eigen::Vector3d>* p_c) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  const meshing::PinholeIntrinsics K = intrinsics();
+  ids->clear();
+  p_c->clear();
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+  for (std::uint64_t id = 0; id < 3000; ++id) {
+    const Eigen::Vector3d ray_c = K.ray({u(*rng) * (K.width - 1), u(*rng) * (K.height - 1)});
+    const Eigen::Vector3d ray_w = T_w_c.linear() * ray_c;
+    const double s = (3.0 - T_w_c.translation().z()) / ray_w.z();
+    const Eigen::Vector3d p_w = T_w_c.translation() + s * ray_w;
+    ids->push_back(id);
+    p_c->push_back(T_c_w * p_w + Eigen::Vector3d(0, 0, noise(*rng)));
+  }
+}
+}  // namespace
+
+TEST(DenseMapper, FusesNoisyPlaneFramesIntoAFlatMesh) {
+  fusion::DenseMapperConfig cfg;
+  cfg.integrator.tsdf.voxel_size = 0.05;
+  cfg.integrator.tsdf.truncation = 0.15;
+  fusion::DenseMapper mapper(cfg, intrinsics());
+  std::mt19937 rng(5);
+  std::vector<std::uint64_t> ids;
+  std::vector<Eigen::Vector3d> p_c;
+  for (int k = 0; k < 6; ++k) {
+    Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
+    T_w_c.translation() = Eigen::Vector3d(0.1 * k, 0.05 * k, 0.0);
+    planePoints(T_w_c, &rng, &ids, &p_c);
+    const fusion::DenseFrameStats s = mapper.addFrame(ids, p_c, T_w_c);
+    EXPECT_TRUE(s.integrated);
+    EXPECT_GT(s.triangles, 1000u);
+  }
+  const fusion::TriangleMesh mesh = mapper.extractMesh();
+  ASSERT_GT(mesh.faces.size(), 100u);
+  double max_err = 0.0;
+  for (const auto& v : mesh.vertices) max_err = std::max(max_err, std::abs(v.z() - 3.0));
+  EXPECT_LT(max_err, 0.05) << "a vertex is more than one voxel off the plane";
+  EXPECT_EQ(mapper.integratorStats().integrated, 6u);
+}
+
+TEST(DenseMapper, SkipsFramesWithoutEnoughPointsOrPose) {
+  fusion::DenseMapper mapper(fusion::DenseMapperConfig{}, intrinsics());
+  std::vector<std::uint64_t> ids = {1, 2};
+  std::vector<Eigen::Vector3d> p_c = {{0, 0, 1}, {0.1, 0, 1}};
+  EXPECT_FALSE(mapper.addFrame(ids, p_c, Eigen::Isometry3d::Identity()).integrated);
+  Eigen::Isometry3d bad = Eigen::Isometry3d::Identity();
+  bad.translation().x() = std::nan("");
+  std::mt19937 rng(1);
+  planePoints(Eigen::Isometry3d::Identity(), &rng, &ids, &p_c);
+  EXPECT_FALSE(mapper.addFrame(ids, p_c, bad).integrated);
+  ids.pop_back();
+  EXPECT_THROW(mapper.addFrame(ids, p_c, Eigen::Isometry3d::Identity()), std::invalid_argument);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
