@@ -1,6 +1,7 @@
 #include "tracking_nodelet.h"
 
 #include <chrono>
+#include <cstdio>
 #include <exception>
 
 #include <pluginlib/class_list_macros.hpp>
@@ -107,10 +108,15 @@ bool TrackingNodelet::createSystem(const vitamin_e::camera::Camera& camera) {
 
 TrackingNodelet::~TrackingNodelet() {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (system_) {  // stderr: rosout may be gone at shutdown
+    std::fprintf(stderr, "[vitamin_e] %zu frames processed, %zu tracked, %d init retries\n%s",
+                 system_->framesProcessed(), system_->framesTracked(), system_->initRetries(),
+                 system_->timings().table().c_str());
+  }
   std::string message;
   if (system_ && !trajectory_file_.empty()) {
     saveTrajectory(trajectory_file_, &message);
-    std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());  // rosout may be gone at shutdown
+    std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
   if (system_ && !map_file_.empty()) {
     saveMap(map_file_, &message);
