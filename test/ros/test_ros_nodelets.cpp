@@ -2,12 +2,19 @@
 //   Pipeline.*   (pipeline.test)    bag -> tracking + meshing nodelets in one manager
 //   TwoProcess.* (two_process.test) tracking_node and tsdf_meshing_node, two processes
 //   BadInput.*   (bad_input.test)   wrong encoding / size / stamp: errors logged, no crash
+//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~map_file written when the nodelet unloads
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <memory>
+#include <sstream>
 
 #include <gtest/gtest.h>
+#include <nodelet/loader.h>
 #include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -254,6 +261,74 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
     EXPECT_TRUE(std::isfinite(s->ms_per_frame));
     EXPECT_LE(s->frames_tracked, s->frames_processed);
   }
+}
+
+// (d, issue 7) ~trajectory_file and ~map_file are written when the tracking
+// nodelet goes away, as on SIGINT of its manager: loaded in this process with a
+// nodelet::Loader, fed the test bag's images, then unloaded.
+TEST(ShutdownSave, TrajectoryAndMapWrittenOnUnload) {
+  const std::string out = param("output_dir", "/tmp");
+  const std::string traj_path = out + "/shutdown_trajectory.txt";
+  const std::string map_path = out + "/shutdown_map.ply";
+  std::remove(traj_path.c_str());
+  std::remove(map_path.c_str());
+  ros::NodeHandle nh;
+  ros::param::set("/saver/trajectory_file", traj_path);
+  ros::param::set("/saver/map_file", map_path);
+  ros::param::set("/saver/calibration_file", param("data_dir") + "/calibration.yaml");
+  ros::param::set("/saver/process_all_frames", true);
+
+  std::vector<sensor_msgs::Image::ConstPtr> images;
+  {
+    rosbag::Bag bag(param("data_dir") + "/sequence.bag");
+    for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+      if (auto img = m.instantiate<sensor_msgs::Image>()) images.push_back(img);
+    }
+  }
+  ASSERT_GE(images.size(), 20u);
+  ros::Publisher pub = nh.advertise<sensor_msgs::Image>("/saver_image", 100);
+  Watcher<vitamin_e::TrackingStatus> status(nh, "/saver/status", 1000);
+  {
+    nodelet::Loader loader(false);
+    ros::M_string remap;
+    remap[ros::names::resolve("/saver/image")] = "/saver_image";
+    remap["/image"] = "/saver_image";
+    ASSERT_TRUE(loader.load("/saver", "vitamin_e/TrackingNodelet", remap, nodelet::V_string()));
+    const auto deadline = ros::WallTime::now() + ros::WallDuration(30.0);
+    while (pub.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.02).sleep();
+    ASSERT_GT(pub.getNumSubscribers(), 0u) << "the nodelet did not subscribe to /saver_image";
+    for (const auto& img : images) {
+      pub.publish(img);
+      ros::WallDuration(0.005).sleep();
+    }
+    EXPECT_TRUE(status.waitFor([&](const Statuses& s) { return framesProcessed(s) >= images.size(); }, 60.0))
+        << "frames processed: " << framesProcessed(status.messages()) << " of " << images.size();
+    ASSERT_TRUE(loader.unload("/saver"));
+  }
+  // trajectory.txt: a header and finite TUM lines; points.ply: a complete header.
+  std::ifstream traj(traj_path);
+  ASSERT_TRUE(traj.good()) << traj_path << " not written on unload";
+  std::string line;
+  int poses = 0;
+  while (std::getline(traj, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ls(line);
+    double v[8];
+    int k = 0;
+    while (k < 8 && ls >> v[k]) ++k;
+    ASSERT_EQ(k, 8) << line;
+    for (double x : v) EXPECT_TRUE(std::isfinite(x)) << line;
+    ++poses;
+  }
+  const auto s = status.messages();
+  ASSERT_FALSE(s.empty());
+  EXPECT_EQ(poses, static_cast<int>(s.back()->frames_tracked)) << "saved poses vs frames tracked";
+  EXPECT_GT(poses, 0) << "no pose tracked on the test bag";
+  std::ifstream ply(map_path, std::ios::binary);
+  ASSERT_TRUE(ply.good()) << map_path << " not written on unload";
+  std::string ply_text((std::istreambuf_iterator<char>(ply)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(ply_text.rfind("ply\n", 0), 0u);
+  EXPECT_NE(ply_text.find("end_header\n"), std::string::npos);
 }
 
 int main(int argc, char** argv) {
