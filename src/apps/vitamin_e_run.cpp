@@ -17,11 +17,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <string>
 
 #include "vitamin_e/io/dataset.h"
 #include "vitamin_e/io/run_report.h"
 #include "vitamin_e/fusion/dense_mapper.h"
+#include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/system.h"
 #ifdef VITAMIN_E_WITH_ROS
 #include "vitamin_e/ros/bag_dataset.h"
@@ -46,6 +48,8 @@ const char* kUsage =
     "  --max-frames N   process at most N frames\n"
     "  --start-frame N  skip the first N frames\n"
     "  --quiet          no progress and no summary\n"
+    "  --pipelined      tracking and mapping on two threads (frame k+1 is tracked while k is mapped);\n"
+    "                   default: sequential, deterministic\n"
     "  --log-frames     print one line per frame on stdout: index, time, state, tracks, mapped, ms, message\n"
     "  --print-config   print every SLAM parameter in force (defaults + --config) and exit\n"
     "  --check          no SLAM: read every frame and print 'index timestamp WxH mean' lines\n"
@@ -76,6 +80,7 @@ struct Options {
   bool check = false;
   bool print_config = false;
   bool log_frames = false;
+  bool pipelined = false;
 };
 
 std::size_t parseCount(const std::string& key, const std::string& v) {
@@ -103,6 +108,10 @@ Options parseArgs(int argc, char** argv) {
     }
     if (a == "--check") {
       o.check = true;
+      continue;
+    }
+    if (a == "--pipelined") {
+      o.pipelined = true;
       continue;
     }
     if (a == "--log-frames") {
@@ -235,7 +244,8 @@ int run(const Options& o) {
                  dataset->kind().c_str(), o.dataset.c_str(), dataset->size(), o.start_frame, end - 1);
     std::fprintf(stderr, "[vitamin_e_run] camera (%s): %s\n", calib.format.c_str(), calib.camera.describe().c_str());
   }
-  pl::System slam(config, calib.camera);
+  std::unique_ptr<pl::System> sequential;
+  if (!o.pipelined) sequential = std::make_unique<pl::System>(config, calib.camera);
   std::unique_ptr<vitamin_e::fusion::DenseMapper> dense;
   if (config.dense_enabled) {
     dense = std::make_unique<vitamin_e::fusion::DenseMapper>(
@@ -251,6 +261,32 @@ int run(const Options& o) {
   Progress progress(end - o.start_frame, o.quiet);
   const auto t_start = std::chrono::steady_clock::now();
   std::size_t attempted = 0;
+  // Everything done with a frame's result: stats, progress, per-frame log, dense
+  // mapping. Runs on the main thread (sequential) or the mapping thread
+  // (--pipelined), never on both.
+  std::mutex result_mutex;
+  auto handle_result = [&](const pl::FrameResult& r) {
+    std::lock_guard<std::mutex> lock(result_mutex);
+    std::vector<std::pair<std::string, double>> stages(r.timing_ms.begin(), r.timing_ms.end());
+    const double total_ms = r.timing_ms.count("total") ? r.timing_ms.at("total") : 0.0;
+    if (o.log_frames) {
+      std::printf("%llu %.9f %s %zu %zu %.1f %s\n", static_cast<unsigned long long>(r.frame_index), r.timestamp,
+                  pl::toString(r.state), r.num_tracked, r.num_mapped, total_ms, r.message.c_str());
+    }
+    if (dense) {
+      // Per-frame mesh + NLTGV here; TSDF fusion runs on the mapper's own thread.
+      pl::framePointsInCamera(r, &dense_ids, &dense_points);
+      const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
+      if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
+    }
+    stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
+    progress.update(stats.frames, stats.tracked_frames);
+  };
+  std::unique_ptr<pl::PipelinedSystem> pipelined;
+  if (o.pipelined) {
+    pipelined = std::make_unique<pl::PipelinedSystem>(config, calib.camera, pl::PipelinedOptions{},
+                                                      [&](pl::FrameResult r) { handle_result(r); });
+  }
   for (std::size_t i = o.start_frame; i < end && !g_stop; ++i) {
     ++attempted;
     cv::Mat image;
@@ -258,41 +294,36 @@ int run(const Options& o) {
     try {
       image = dataset->loadImage(i);
     } catch (const io::DatasetError& e) {
+      std::lock_guard<std::mutex> lock(result_mutex);
       progress.warn(std::string(e.what()) + " (frame " + std::to_string(i) + " skipped)");
       ++stats.skipped_frames;
       continue;
     }
     const double load_ms = vitamin_e::elapsedMs(t_load);
-    const auto t0 = std::chrono::steady_clock::now();
-    const pl::FrameResult r = slam.process(image, dataset->timestamp(i), dataset->timestampText(i));
-    const double total_ms = vitamin_e::elapsedMs(t0);
-    std::vector<std::pair<std::string, double>> stages(r.timing_ms.begin(), r.timing_ms.end());
-    stages.emplace_back("image_load", load_ms);
-    if (dense) {
-      // Per-frame mesh + NLTGV here; TSDF fusion runs on the mapper's own thread.
-      pl::framePointsInCamera(r, &dense_ids, &dense_points);
-      const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
-      if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
+    {
+      std::lock_guard<std::mutex> lock(result_mutex);
+      stats.timing.add("image_load", load_ms);
     }
-    if (o.log_frames) {
-      std::printf("%zu %s %s %zu %zu %.1f %s\n", i, dataset->timestampText(i).c_str(), pl::toString(r.state),
-                  r.num_tracked, r.num_mapped, total_ms, r.message.c_str());
+    if (pipelined) {
+      pipelined->submit(image, dataset->timestamp(i), dataset->timestampText(i));
+    } else {
+      handle_result(sequential->process(image, dataset->timestamp(i), dataset->timestampText(i)));
     }
-    stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
-    progress.update(attempted, stats.tracked_frames);
   }
+  if (pipelined) pipelined->flush();
+  const pl::System& system = pipelined ? pipelined->system() : *sequential;
   progress.finish(attempted, stats.tracked_frames);
   stats.interrupted = g_stop != 0;
   stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
-  stats.init_retries = slam.initRetries();
+  stats.init_retries = system.initRetries();
   // Frames seen while initializing are localized once the map exists: the
   // system's count (= trajectory poses) is the number of tracked frames.
-  stats.tracked_frames = slam.framesTracked();
+  stats.tracked_frames = system.framesTracked();
 
   std::string err;
-  const std::vector<pl::MapPoint3> points = slam.mapPoints();
+  const std::vector<pl::MapPoint3> points = system.mapPoints();
   stats.map_points = points.size();
-  bool ok = pl::saveTrajectoryTum(slam.trajectory(), traj_path, &err);
+  bool ok = pl::saveTrajectoryTum(system.trajectory(), traj_path, &err);
   if (ok) ok = pl::saveMapPly(points, ply_path, &err);
   const std::string mesh_path = (fs::path(o.out) / "mesh.ply").string();
   if (ok && dense) ok = dense->saveMesh(mesh_path, &err);

@@ -22,7 +22,17 @@ SystemConfig withCameraFocal(SystemConfig config, const camera::Camera& camera) 
 System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
     : config(withCameraFocal(cfg, cam)), camera(cam), tracker(cfg.tracker), map(cfg.map) {}
 
-FrameResult System::Impl::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+void System::Impl::addTiming(const std::string& stage, double ms) {
+  std::lock_guard<std::mutex> lock(timings_mutex);
+  timings.add(stage, ms);
+}
+
+void System::Impl::dropTracksLater(const std::vector<std::uint64_t>& ids) {
+  std::lock_guard<std::mutex> lock(drops_mutex);
+  pending_drops.insert(pending_drops.end(), ids.begin(), ids.end());
+}
+
+TrackedFrame System::Impl::trackStage(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
   if (image.empty() || image.type() != CV_8UC1) {
     throw std::invalid_argument("System::process: expected a non-empty 8-bit single-channel (mono8) image");
   }
@@ -31,41 +41,62 @@ FrameResult System::Impl::process(const cv::Mat& image, double timestamp, const 
                                 std::to_string(image.rows) + " but the calibration is " +
                                 std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
   }
-  FrameResult result;
-  result.timestamp = timestamp;
-  result.state = state;
+  TrackedFrame f;
+  f.timestamp = timestamp;
+  f.timestamp_text = timestamp_text;
   if (!std::isfinite(timestamp) || (have_last_stamp && timestamp <= last_stamp)) {
-    result.frame_index = frame_index;
-    result.message = "frame skipped: timestamp " + std::to_string(timestamp) + " does not follow the previous " +
-                     std::to_string(last_stamp);
-    result.init_retries = init_retries;
-    return result;
+    f.skipped = true;
+    f.frame_index = next_frame_index;
+    f.message = "frame skipped: timestamp " + std::to_string(timestamp) + " does not follow the previous " +
+                std::to_string(last_stamp);
+    return f;
   }
   have_last_stamp = true;
   last_stamp = timestamp;
-  result.frame_index = frame_index;
-  cur_t = timestamp;
-  cur_text = timestamp_text;
+  f.frame_index = next_frame_index++;
+  // Tracks the back end rejected since the last frame stop here (applied before
+  // tracking, so the sequential and the pipelined modes see the same rule).
+  {
+    std::vector<std::uint64_t> drops;
+    {
+      std::lock_guard<std::mutex> lock(drops_mutex);
+      drops.swap(pending_drops);
+    }
+    if (!drops.empty()) tracker.dropTracks(drops);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  tracking::TrackerFrame tf = tracker.track(image, timestamp);
+  f.tracks.reserve(tf.points.size());
+  for (const tracking::TrackedPoint& p : tf.points) {
+    FrameTrack t;
+    t.id = p.id;
+    t.uv = p.uv;
+    t.intensity = p.intensity;
+    if (!camera.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
+    f.tracks.push_back(t);
+  }
+  f.tracking_ms = elapsedMs(t0);
+  addTiming("tracking", f.tracking_ms);
+  return f;
+}
+
+FrameResult System::Impl::mapStage(TrackedFrame&& f) {
+  FrameResult result;
+  result.timestamp = f.timestamp;
+  result.state = state;
+  result.frame_index = f.frame_index;
+  result.init_retries = init_retries;
+  if (f.skipped) {
+    result.message = std::move(f.message);
+    return result;
+  }
+  frame_index = f.frame_index;
+  cur_t = f.timestamp;
+  cur_text = std::move(f.timestamp_text);
+  cur_tracks = std::move(f.tracks);
+  result.timing_ms["tracking"] = f.tracking_ms;
 
   const auto t_start = std::chrono::steady_clock::now();
-  {
-    const auto t0 = std::chrono::steady_clock::now();
-    tracking::TrackerFrame tf = tracker.track(image, timestamp);
-    cur_tracks.clear();
-    cur_tracks.reserve(tf.points.size());
-    for (const tracking::TrackedPoint& p : tf.points) {
-      FrameTrack t;
-      t.id = p.id;
-      t.uv = p.uv;
-      t.intensity = p.intensity;
-      if (!camera.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
-      cur_tracks.push_back(t);
-    }
-    const double ms = elapsedMs(t0);
-    timings.add("tracking", ms);
-    result.timing_ms["tracking"] = ms;
-  }
-
   if (state == TrackingState::kTracking) {
     track(&result);
   } else {
@@ -76,11 +107,16 @@ FrameResult System::Impl::process(const cv::Mat& image, double timestamp, const 
   result.num_tracked = cur_tracks.size();
   result.map_size = map.landmarks().size();
   result.init_retries = init_retries;
-  const double total = elapsedMs(t_start);
-  timings.add("total", total);
+  // total = the work of both stages for this frame (tracking + mapping).
+  const double total = f.tracking_ms + elapsedMs(t_start);
+  addTiming("total", total);
   result.timing_ms["total"] = total;
-  ++frame_index;
+  ++frames_processed;
   return result;
+}
+
+FrameResult System::Impl::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+  return mapStage(trackStage(image, timestamp, timestamp_text));
 }
 
 void System::Impl::recordPose(std::uint64_t index, double t, const std::string& text, const Eigen::Isometry3d& T_w_c) {
@@ -135,6 +171,10 @@ FrameResult System::process(const cv::Mat& image, double timestamp, const std::s
 void System::reset() {
   impl_->resetMap();
   impl_->tracker.reset();
+  {
+    std::lock_guard<std::mutex> lock(impl_->drops_mutex);
+    impl_->pending_drops.clear();
+  }
   impl_->have_last_pose = false;
 }
 
@@ -148,7 +188,7 @@ std::vector<MapPoint3> System::mapPoints() const {
   return out;
 }
 
-std::size_t System::framesProcessed() const { return impl_->frame_index; }
+std::size_t System::framesProcessed() const { return impl_->frames_processed; }
 std::size_t System::framesTracked() const { return impl_->frames_tracked; }
 int System::initRetries() const { return impl_->init_retries; }
 const StageTimings& System::timings() const { return impl_->timings; }

@@ -1,22 +1,16 @@
 #pragma once
 // Private state of pipeline::System (not installed).
 #include <deque>
+#include <mutex>
 #include <unordered_map>
 #include <vector>
 
 #include "vitamin_e/map/map.h"
 #include "vitamin_e/pipeline/system.h"
+#include "vitamin_e/pipeline/tracked_frame.h"
 #include "vitamin_e/tracking/dense_tracker.h"
 
 namespace vitamin_e::pipeline {
-
-// A 2D track in the current frame, undistorted.
-struct FrameTrack {
-  std::uint64_t id;
-  Eigen::Vector2f uv;      // distorted pixel
-  Eigen::Vector2d xy;      // normalized undistorted
-  std::uint8_t intensity;
-};
 
 // A frame seen while initializing, localized once the map exists.
 struct PendingFrame {
@@ -30,6 +24,13 @@ struct System::Impl {
   Impl(const SystemConfig& config, const camera::Camera& camera);
 
   FrameResult process(const cv::Mat& image, double timestamp, const std::string& timestamp_text);
+  // The two stages of process(): tracking (tracker + undistortion) and mapping
+  // (initialization, pose, BA, map). In the pipelined mode they run on two
+  // threads; they share nothing but the thread-safe pending_drops and timings.
+  TrackedFrame trackStage(const cv::Mat& image, double timestamp, const std::string& timestamp_text);
+  FrameResult mapStage(TrackedFrame&& frame);
+  void addTiming(const std::string& stage, double ms);
+  void dropTracksLater(const std::vector<std::uint64_t>& ids);  // applied before the next tracking
   void resetMap();
 
   // stages (system_init.cpp, system_track.cpp)
@@ -51,12 +52,19 @@ struct System::Impl {
   tracking::DenseTracker tracker;
   map::Map map;
   StageTimings timings;
+  std::mutex timings_mutex;
+  std::mutex drops_mutex;
+  std::vector<std::uint64_t> pending_drops;
 
-  // stream state
-  std::uint64_t frame_index = 0;
-  std::uint64_t frames_tracked = 0;
+  // tracking-stage state
+  std::uint64_t next_frame_index = 0;
   bool have_last_stamp = false;
   double last_stamp = 0.0;
+
+  // mapping-stage state
+  std::uint64_t frame_index = 0;  // index of the frame being mapped
+  std::uint64_t frames_processed = 0;
+  std::uint64_t frames_tracked = 0;
   int init_retries = 0;
   bool initialized_once = false;
   TrackingState state = TrackingState::kInitializing;

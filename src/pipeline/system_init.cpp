@@ -61,7 +61,7 @@ void System::Impl::initialize(FrameResult* result) {
   const double med_disp = median(disparity);
   if (med_disp < config.init_min_disparity_px) {
     result->message = "initializing: waiting for parallax (median disparity " + std::to_string(med_disp) + " px)";
-    timings.add("init", elapsedMs(t0));
+    addTiming("init", elapsedMs(t0));
     return;
   }
   geometry::TwoViewResult tv = geometry::initializeTwoView(xy0, xy1, config.init);
@@ -73,7 +73,7 @@ void System::Impl::initialize(FrameResult* result) {
       pending.push_back(std::move(cur));
       result->message += "; new reference";
     }
-    timings.add("init", elapsedMs(t0));
+    addTiming("init", elapsedMs(t0));
     return;
   }
 
@@ -140,7 +140,7 @@ void System::Impl::initialize(FrameResult* result) {
   result->T_w_c = T_w_cur;
   result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
                     std::to_string(tv.median_parallax_deg) + " deg";
-  timings.add("init", elapsedMs(t0));
+  addTiming("init", elapsedMs(t0));
 }
 
 void System::Impl::localizePendingFrames() {

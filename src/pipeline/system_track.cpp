@@ -40,7 +40,7 @@ void System::Impl::track(FrameResult* result) {
     }
     const bool ok = !vanished && estimatePose(&T_w_c, &why);
     const double ms = elapsedMs(t0);
-    timings.add("pose", ms);
+    addTiming("pose", ms);
     result->timing_ms["pose"] = ms;
     if (!ok) {
       ++init_retries;
@@ -63,7 +63,7 @@ void System::Impl::track(FrameResult* result) {
     const auto t0 = std::chrono::steady_clock::now();
     bundleAdjust(false);
     const double ms = elapsedMs(t0);
-    timings.add("ba", ms);
+    addTiming("ba", ms);
     result->timing_ms["ba"] = ms;
   }
   // A pose must be finite and must not jump: a step far beyond the scene depth
@@ -102,7 +102,7 @@ void System::Impl::track(FrameResult* result) {
     }
     if (depths.size() > 20) scene_depth = std::max(1e-6, median(depths));
     const double ms = elapsedMs(t0);
-    timings.add("map", ms);
+    addTiming("map", ms);
     result->timing_ms["map"] = ms;
   }
   state = TrackingState::kTracking;
@@ -248,7 +248,7 @@ void System::Impl::refreshCurrentLandmarks() {
 void System::Impl::removeLandmarks(const std::vector<std::uint64_t>& ids) {
   if (ids.empty()) return;
   for (std::uint64_t id : ids) map.removeLandmark(id);
-  tracker.dropTracks(ids);
+  dropTracksLater(ids);
   refreshCurrentLandmarks();
 }
 

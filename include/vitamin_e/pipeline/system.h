@@ -57,6 +57,7 @@ class System {
   const camera::Camera& camera() const;
 
  private:
+  friend class PipelinedSystem;  // runs the two stages of process() on two threads
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

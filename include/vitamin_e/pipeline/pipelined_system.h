@@ -1,0 +1,72 @@
+#pragma once
+// The SLAM system as two owned stages on two threads, joined by bounded queues:
+//   submit() -> [input queue] -> tracking thread (dense tracker, undistortion)
+//            -> [tracked queue] -> mapping thread (init, pose, BA, map) -> on_result
+// While frame k is being mapped, frame k+1 is already being tracked. Results
+// arrive in frame order. Track rejections of the mapping stage reach the tracker
+// one frame later than in the sequential System, so results may differ slightly
+// from System::process (which is deterministic and used by the tests).
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include <opencv2/core.hpp>
+
+#include "vitamin_e/common/bounded_queue.h"
+#include "vitamin_e/pipeline/system.h"
+#include "vitamin_e/pipeline/tracked_frame.h"
+
+namespace vitamin_e::pipeline {
+
+struct PipelinedOptions {
+  std::size_t input_capacity = 2;  // frames waiting for the tracker
+  bool drop_oldest = false;        // live input: drop the oldest waiting frame instead of blocking submit()
+};
+
+class PipelinedSystem {
+ public:
+  using ResultCallback = std::function<void(FrameResult)>;
+
+  // on_result is called on the mapping thread, once per processed frame, in order.
+  PipelinedSystem(const SystemConfig& config, const camera::Camera& camera, const PipelinedOptions& options,
+                  ResultCallback on_result);
+  ~PipelinedSystem();  // finishes the submitted frames, then joins both threads
+  PipelinedSystem(const PipelinedSystem&) = delete;
+  PipelinedSystem& operator=(const PipelinedSystem&) = delete;
+
+  // Queues a frame (the image is shared, not copied: do not write to it
+  // afterwards). Throws std::invalid_argument for a wrong image type or size,
+  // like System::process. Returns false if the system is shutting down.
+  bool submit(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
+  // Blocks until every submitted frame has been mapped (or dropped).
+  void flush();
+  std::size_t droppedFrames() const;
+
+  // The underlying system, for trajectory(), mapPoints(), counters: call only
+  // after flush() (the mapping thread is idle then).
+  const System& system() const { return *system_; }
+
+ private:
+  struct Input {
+    cv::Mat image;
+    double timestamp;
+    std::string timestamp_text;
+  };
+  void trackingLoop();
+  void mappingLoop();
+
+  std::unique_ptr<System> system_;
+  ResultCallback on_result_;
+  BoundedQueue<Input> input_;
+  BoundedQueue<TrackedFrame> tracked_;
+  std::thread tracking_thread_, mapping_thread_;
+  mutable std::mutex count_mutex_;
+  std::condition_variable idle_cv_;
+  std::size_t submitted_ = 0, finished_ = 0, dropped_ = 0;
+};
+
+}  // namespace vitamin_e::pipeline

@@ -1,0 +1,86 @@
+#include "vitamin_e/pipeline/pipelined_system.h"
+
+#include <stdexcept>
+
+#include "system_impl.h"
+
+namespace vitamin_e::pipeline {
+
+PipelinedSystem::PipelinedSystem(const SystemConfig& config, const camera::Camera& camera,
+                                 const PipelinedOptions& options, ResultCallback on_result)
+    : system_(std::make_unique<System>(config, camera)),
+      on_result_(std::move(on_result)),
+      input_(options.input_capacity, options.drop_oldest),
+      tracked_(2, false) {
+  tracking_thread_ = std::thread([this] { trackingLoop(); });
+  mapping_thread_ = std::thread([this] { mappingLoop(); });
+}
+
+PipelinedSystem::~PipelinedSystem() {
+  input_.close();  // the tracking loop drains the input, then closes tracked_
+  if (tracking_thread_.joinable()) tracking_thread_.join();
+  if (mapping_thread_.joinable()) mapping_thread_.join();
+}
+
+bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+  const camera::Camera& cam = system_->camera();
+  if (image.empty() || image.type() != CV_8UC1) {
+    throw std::invalid_argument("PipelinedSystem::submit: expected a non-empty 8-bit single-channel (mono8) image");
+  }
+  if (image.cols != cam.width() || image.rows != cam.height()) {
+    throw std::invalid_argument("PipelinedSystem::submit: image is " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + " but the calibration is " +
+                                std::to_string(cam.width()) + "x" + std::to_string(cam.height()));
+  }
+  {
+    std::lock_guard<std::mutex> lock(count_mutex_);
+    ++submitted_;
+  }
+  std::size_t dropped = 0;
+  const bool queued = input_.push(Input{image, timestamp, timestamp_text}, &dropped);
+  std::lock_guard<std::mutex> lock(count_mutex_);
+  if (!queued) ++dropped;
+  dropped_ += dropped;
+  finished_ += dropped;
+  idle_cv_.notify_all();
+  return queued;
+}
+
+void PipelinedSystem::trackingLoop() {
+  System::Impl& impl = *system_->impl_;
+  while (std::optional<Input> in = input_.pop()) {
+    TrackedFrame frame;
+    try {
+      frame = impl.trackStage(in->image, in->timestamp, in->timestamp_text);
+    } catch (const std::exception& e) {
+      frame.skipped = true;
+      frame.timestamp = in->timestamp;
+      frame.message = std::string("frame skipped: ") + e.what();
+    }
+    tracked_.push(std::move(frame));
+  }
+  tracked_.close();
+}
+
+void PipelinedSystem::mappingLoop() {
+  System::Impl& impl = *system_->impl_;
+  while (std::optional<TrackedFrame> frame = tracked_.pop()) {
+    FrameResult result = impl.mapStage(std::move(*frame));
+    if (on_result_) on_result_(std::move(result));
+    std::lock_guard<std::mutex> lock(count_mutex_);
+    ++finished_;
+    idle_cv_.notify_all();
+  }
+}
+
+void PipelinedSystem::flush() {
+  std::unique_lock<std::mutex> lock(count_mutex_);
+  idle_cv_.wait(lock, [&] { return finished_ >= submitted_; });
+}
+
+std::size_t PipelinedSystem::droppedFrames() const {
+  std::lock_guard<std::mutex> lock(count_mutex_);
+  return dropped_;
+}
+
+}  // namespace vitamin_e::pipeline
