@@ -93,11 +93,12 @@ bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error) {
     *error = "big-endian 16-bit images are not supported";
     return false;
   }
-  // A view on the message's buffer (no copy); converted images get their own buffer.
+  // A view on the message's buffer; the result always owns its pixels (the core may
+  // keep the image beyond the message's lifetime).
   const cv::Mat view(static_cast<int>(msg.height), static_cast<int>(msg.width), cv_type,
                      const_cast<std::uint8_t*>(msg.data.data()), msg.step);
   if (cv_type == CV_8UC1) {
-    *gray = view;
+    view.copyTo(*gray);
   } else if (cv_type == CV_16UC1) {
     view.convertTo(*gray, CV_8U, 1.0 / 256.0);
   } else if (e == enc::RGB8) {

@@ -28,9 +28,9 @@ geometry_msgs::Transform toTransformMsg(const Eigen::Isometry3d& T);
 Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose);
 Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& transform);
 
-// Image message -> CV_8UC1 (mono8 shared without copy when possible; rgb8, bgr8,
-// rgba8, bgra8 converted to gray; mono16 / 16UC1 shifted >> 8). Returns false
-// and sets *error for any other encoding or a malformed message.
+// Image message -> CV_8UC1 owning its pixels (mono8 copied; rgb8, bgr8, rgba8,
+// bgra8 converted to gray; mono16 / 16UC1 scaled by 1/256). Returns false and
+// sets *error for any other encoding or a malformed message.
 bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error);
 
 // camera_info -> camera model (plumb_bob / rational_polynomial (first 5) /
