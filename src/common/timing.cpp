@@ -16,6 +16,12 @@ double percentile(std::vector<double> values, double pct) {
   return values[lo] * (1.0 - frac) + values[hi] * frac;
 }
 
+double upperMedian(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
 void StageTimings::add(const std::string& stage, double ms) {
   auto it = samples_.find(stage);
   if (it == samples_.end()) {

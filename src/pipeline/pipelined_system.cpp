@@ -23,15 +23,7 @@ PipelinedSystem::~PipelinedSystem() {
 }
 
 bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  const camera::Camera& cam = system_->camera();
-  if (image.empty() || image.type() != CV_8UC1) {
-    throw std::invalid_argument("PipelinedSystem::submit: expected a non-empty 8-bit single-channel (mono8) image");
-  }
-  if (image.cols != cam.width() || image.rows != cam.height()) {
-    throw std::invalid_argument("PipelinedSystem::submit: image is " + std::to_string(image.cols) + "x" +
-                                std::to_string(image.rows) + " but the calibration is " +
-                                std::to_string(cam.width()) + "x" + std::to_string(cam.height()));
-  }
+  validateImage(image, system_->camera());
   {
     std::lock_guard<std::mutex> lock(count_mutex_);
     ++submitted_;

@@ -22,6 +22,17 @@ SystemConfig withCameraFocal(SystemConfig config, const camera::Camera& camera) 
 System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
     : config(withCameraFocal(cfg, cam)), camera(cam), tracker(cfg.tracker), map(cfg.map) {}
 
+void validateImage(const cv::Mat& image, const camera::Camera& camera) {
+  if (image.empty() || image.type() != CV_8UC1) {
+    throw std::invalid_argument("SLAM input: expected a non-empty 8-bit single-channel (mono8) image");
+  }
+  if (image.cols != camera.width() || image.rows != camera.height()) {
+    throw std::invalid_argument("SLAM input: image is " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + " but the calibration is " +
+                                std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+  }
+}
+
 void System::Impl::addTiming(const std::string& stage, double ms) {
   std::lock_guard<std::mutex> lock(timings_mutex);
   timings.add(stage, ms);
@@ -33,14 +44,7 @@ void System::Impl::dropTracksLater(const std::vector<std::uint64_t>& ids) {
 }
 
 TrackedFrame System::Impl::trackStage(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  if (image.empty() || image.type() != CV_8UC1) {
-    throw std::invalid_argument("System::process: expected a non-empty 8-bit single-channel (mono8) image");
-  }
-  if (image.cols != camera.width() || image.rows != camera.height()) {
-    throw std::invalid_argument("System::process: image is " + std::to_string(image.cols) + "x" +
-                                std::to_string(image.rows) + " but the calibration is " +
-                                std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
-  }
+  validateImage(image, camera);
   TrackedFrame f;
   f.timestamp = timestamp;
   f.timestamp_text = timestamp_text;

@@ -10,14 +10,6 @@
 
 namespace vitamin_e::pipeline {
 
-namespace {
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-}  // namespace
-
 void System::Impl::initialize(FrameResult* result) {
   const auto t0 = std::chrono::steady_clock::now();
   state = TrackingState::kInitializing;
@@ -58,7 +50,7 @@ void System::Impl::initialize(FrameResult* result) {
   pending.push_back(pf);
   while (static_cast<int>(pending.size()) > config.init_max_pending_frames) pending.erase(pending.begin() + 1);
 
-  const double med_disp = median(disparity);
+  const double med_disp = upperMedian(disparity);
   if (med_disp < config.init_min_disparity_px) {
     result->message = "initializing: waiting for parallax (median disparity " + std::to_string(med_disp) + " px)";
     addTiming("init", elapsedMs(t0));

@@ -11,14 +11,6 @@
 
 namespace vitamin_e::pipeline {
 
-namespace {
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-}  // namespace
-
 void System::Impl::track(FrameResult* result) {
   refreshCurrentLandmarks();
   // Most map points of the previous frame gone at once (a cut, a sudden flip, a
@@ -100,7 +92,7 @@ void System::Impl::track(FrameResult* result) {
     for (const map::Landmark* l : cur_landmarks) {
       if (l) depths.push_back((T_c_w * l->p_w).z());
     }
-    if (depths.size() > 20) scene_depth = std::max(1e-6, median(depths));
+    if (depths.size() > 20) scene_depth = std::max(1e-6, upperMedian(depths));
     const double ms = elapsedMs(t0);
     addTiming("map", ms);
     result->timing_ms["map"] = ms;
@@ -267,7 +259,7 @@ bool System::Impl::needKeyframe() const {
     if (f.z() <= 1e-9) continue;
     parallax.push_back((f.hnormalized() - t.xy).norm() * camera.fx());
   }
-  const double med = median(parallax);
+  const double med = upperMedian(parallax);
   if (med >= config.keyframe_parallax_px) return true;
   const double mapped_ratio = cur_tracks.empty() ? 0.0 : static_cast<double>(mapped) / cur_tracks.size();
   return mapped_ratio < config.keyframe_min_mapped_ratio && med >= 0.3 * config.keyframe_parallax_px;

@@ -18,6 +18,8 @@ struct TimingSummary {
 
 // Percentile (0..100) of a sample by linear interpolation; 0 for an empty sample.
 double percentile(std::vector<double> values, double pct);
+// The upper median (element n/2 of the sorted sample, no interpolation); 0 if empty.
+double upperMedian(std::vector<double> values);
 
 class StageTimings {
  public:

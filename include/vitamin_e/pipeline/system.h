@@ -62,6 +62,10 @@ class System {
   std::unique_ptr<Impl> impl_;
 };
 
+// Throws std::invalid_argument unless image is a non-empty CV_8UC1 of the
+// camera's size (the message names both sizes).
+void validateImage(const cv::Mat& image, const camera::Camera& camera);
+
 // The frame's triangulated points in its camera frame (p_c = T_w_c^-1 p_w) with
 // their track ids: the input of the dense reconstruction. Empty unless the
 // frame has a valid pose.
