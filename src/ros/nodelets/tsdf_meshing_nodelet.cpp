@@ -1,7 +1,10 @@
 // vitamin_e/TsdfMeshingNodelet: per-frame messages of TrackingNodelet (~frame) in,
-// TSDF mesh out. Each frame's points are meshed (meshing::FrameMesher, optional
-// NLTGV smoothing) and fused into a fusion::TsdfVolume; the zero level set is
-// published every ~publish_period as a chunked MarkerArray of TRIANGLE_LISTs.
+// TSDF mesh out. Each frame's points go through fusion::DenseMapper (the same
+// path as the offline runner: Delaunay mesh, NLTGV smoothing, pruning, TSDF
+// fusion on its own thread); the zero level set is published every
+// ~publish_period as a chunked MarkerArray of TRIANGLE_LISTs. The dense settings
+// come from the "dense" section of ~config_file (the SLAM config, map units),
+// each overridable by a private parameter of the same name.
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -16,9 +19,9 @@
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TsdfMeshingConfig.h"
+#include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
-#include "vitamin_e/meshing/frame_mesher.h"
-#include "vitamin_e/meshing/nltgv_denoiser.h"
+#include "vitamin_e/pipeline/system_config.h"
 #include "vitamin_e/ros/conversions.h"
 #include "vitamin_e/ros/mesh_markers.h"
 
@@ -31,7 +34,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
  public:
   ~TsdfMeshingNodelet() override {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (tsdf_ && !mesh_file_.empty()) {
+    if (dense_ && !mesh_file_.empty()) {
       std::string message;
       saveMesh(mesh_file_, &message);
       std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());  // rosout may be gone at shutdown
@@ -44,31 +47,38 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     pnh.param<std::string>("map_frame", map_frame_, "");
     pnh.param<std::string>("mesh_file", mesh_file_, "");
-    pnh.param("denoise", denoise_, true);
-    fusion::TsdfConfig tsdf;
+    std::string config_file;
+    pnh.param<std::string>("config_file", config_file, "");
+    try {
+      dense_config_ = config_file.empty() ? vitamin_e::pipeline::defaultDenseConfig()
+                                          : vitamin_e::pipeline::loadSystemConfig(config_file).dense;
+    } catch (const std::exception& e) {
+      NODELET_FATAL("%s (no subscription)", e.what());
+      return;
+    }
+    fusion::DenseMapperConfig& d = dense_config_;
+    fusion::TsdfConfig& tsdf = d.integrator.tsdf;
+    pnh.param("denoise", d.denoise, d.denoise);
     pnh.param("voxel_size", tsdf.voxel_size, tsdf.voxel_size);
     pnh.param("truncation", tsdf.truncation, tsdf.truncation);
     pnh.param("max_weight", tsdf.max_weight, tsdf.max_weight);
     pnh.param("min_depth", tsdf.min_depth, tsdf.min_depth);
     pnh.param("max_depth", tsdf.max_depth, tsdf.max_depth);
     pnh.param("raster_downscale", tsdf.raster_downscale, tsdf.raster_downscale);
-    meshing::FrameMesherConfig mesher;
-    pnh.param("max_edge_px", mesher.max_edge_px, mesher.max_edge_px);
-    pnh.param("max_normal_angle_deg", mesher.max_normal_angle_deg, mesher.max_normal_angle_deg);
-    pnh.param("max_inv_depth_jump", mesher.max_inv_depth_jump, mesher.max_inv_depth_jump);
-    mesher.max_depth = std::min(mesher.max_depth, tsdf.max_depth);
+    pnh.param("max_edge_px", d.prune.max_edge_px, d.prune.max_edge_px);
+    pnh.param("max_normal_angle_deg", d.prune.max_normal_angle_deg, d.prune.max_normal_angle_deg);
+    pnh.param("max_inv_depth_jump", d.prune.max_inv_depth_jump, d.prune.max_inv_depth_jump);
+    d.mesher.max_depth = std::min(d.mesher.max_depth, tsdf.max_depth);
+    d.prune.max_depth = std::min(d.prune.max_depth, tsdf.max_depth);
     try {
-      tsdf.validate();
-      mesher.validate();
-      tsdf_ = std::make_unique<fusion::TsdfVolume>(tsdf);
-      mesher_ = std::make_unique<meshing::FrameMesher>(mesher);
-      denoiser_ = std::make_unique<meshing::NltgvDenoiser>();
+      d.validate();
     } catch (const std::exception& e) {
       NODELET_FATAL("bad meshing parameter: %s (no subscription)", e.what());
       return;
     }
-    NODELET_INFO("TSDF voxel %.3f m, truncation %.3f m, depth [%.2f, %.2f] m, NLTGV %s", tsdf.voxel_size,
-                 tsdf.truncation, tsdf.min_depth, tsdf.max_depth, denoise_ ? "on" : "off");
+    config_ok_ = true;
+    NODELET_INFO("TSDF voxel %.3f, truncation %.3f, depth [%.2f, %.2f] (map units), NLTGV %s", tsdf.voxel_size,
+                 tsdf.truncation, tsdf.min_depth, tsdf.max_depth, d.denoise ? "on" : "off");
 
     mesh_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("mesh", 1, true);
     save_srv_ = pnh.advertiseService("save_mesh", &TsdfMeshingNodelet::saveMeshService, this);
@@ -121,18 +131,23 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     for (const auto& p : msg->points_c) p_c.emplace_back(p.x, p.y, p.z);
 
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!tsdf_) return;
+    if (!config_ok_) return;
     if (map_frame_.empty()) map_frame_ = msg->header.frame_id.empty() ? "map" : msg->header.frame_id;
     try {
       K.validate();
-      meshing::FrameMesh mesh = mesher_->buildFromPoints(msg->ids, p_c, K);
-      if (denoise_ && mesh.triangles.size() > 0) {
-        denoiser_->denoise(&mesh, K);
-        mesher_->prune(&mesh, K);
+      if (!dense_) {
+        dense_ = std::make_unique<fusion::DenseMapper>(dense_config_, K);
+        dense_K_ = K;
+      } else if (K.fx != dense_K_.fx || K.fy != dense_K_.fy || K.cx != dense_K_.cx || K.cy != dense_K_.cy ||
+                 K.width != dense_K_.width || K.height != dense_K_.height) {
+        NODELET_ERROR_THROTTLE(2.0, "frame %lu has other intrinsics than the first frame: not fused",
+                               static_cast<unsigned long>(msg->frame_index));
+        return;
       }
-      if (!mesh.triangles.empty()) tsdf_->integrate(mesh, T_w_c, K);
-      ++frames_integrated_;
-      changed_ = true;
+      if (dense_->addFrame(msg->ids, p_c, T_w_c).integrated) {
+        ++frames_integrated_;
+        changed_ = true;
+      }
     } catch (const std::exception& e) {
       NODELET_ERROR_THROTTLE(2.0, "frame %lu not fused: %s", static_cast<unsigned long>(msg->frame_index),
                              e.what());
@@ -141,9 +156,9 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
 
   void publishTimer(const ros::WallTimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!tsdf_ || !changed_ || mesh_pub_.getNumSubscribers() == 0) return;
+    if (!dense_ || !changed_ || mesh_pub_.getNumSubscribers() == 0) return;
     changed_ = false;
-    const fusion::TriangleMesh mesh = tsdf_->extractMesh();
+    const fusion::TriangleMesh mesh = dense_->extractMesh();
     MeshMarkerOptions options;
     options.frame_id = map_frame_.empty() ? "map" : map_frame_;
     options.stamp = ros::Time::now();
@@ -159,7 +174,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   }
 
   bool saveMesh(const std::string& path, std::string* message) {
-    const fusion::TriangleMesh mesh = tsdf_->extractMesh();
+    const fusion::TriangleMesh mesh = dense_->extractMesh();
     std::string error;
     if (!fusion::saveMeshPly(mesh, path, &error)) {
       *message = "cannot write mesh " + path + ": " + error;
@@ -175,9 +190,11 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   bool saveMeshService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
     std::lock_guard<std::mutex> lock(mutex_);
     const std::string path = req.path.empty() ? mesh_file_ : req.path;
-    if (!tsdf_ || path.empty()) {
+    if (!dense_ || path.empty()) {
       res.success = false;
-      res.message = !tsdf_ ? "no TSDF (bad parameters)" : "no path given and ~mesh_file not set";
+      res.message = !config_ok_ ? "no TSDF (bad parameters)"
+                    : !dense_   ? "no frame fused yet"
+                                : "no path given and ~mesh_file not set";
       return true;
     }
     res.success = saveMesh(path, &res.message);
@@ -187,12 +204,12 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
 
   std::string map_frame_;
   std::string mesh_file_;
-  bool denoise_ = true;
   std::mutex mutex_;
   vitamin_e::TsdfMeshingConfig dyn_;
-  std::unique_ptr<fusion::TsdfVolume> tsdf_;
-  std::unique_ptr<meshing::FrameMesher> mesher_;
-  std::unique_ptr<meshing::NltgvDenoiser> denoiser_;
+  fusion::DenseMapperConfig dense_config_;
+  bool config_ok_ = false;
+  std::unique_ptr<fusion::DenseMapper> dense_;  // made at the first frame (its intrinsics)
+  meshing::PinholeIntrinsics dense_K_;
   std::size_t frames_integrated_ = 0;
   std::size_t published_markers_ = 0;
   bool changed_ = false;
