@@ -3,8 +3,10 @@
 # with exact ground truth (once; reused afterwards), runs VITAMIN-E on it,
 # evaluates the trajectory (Sim(3) ATE, plot) and prints the timing per stage.
 #   ./scripts/demo.sh [--frames N] [--seed S] [--fresh]
+# Then plays the sequence as a bag through the ROS nodelets (euroc.launch, headless).
 # Outputs in demo_output/: sequence/ (EuRoC layout), run/ (trajectory.txt,
-# stats.json, points.ply), trajectory.png, evaluation.txt. VE_NO_BUILD=1 skips the build.
+# stats.json, points.ply, mesh.ply), trajectory.png, evaluation.txt, ros/ (bag,
+# trajectory, mesh of the ROS run). VE_NO_BUILD=1 skips the build, VE_NO_ROS=1 the ROS run.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -30,7 +32,7 @@ bin_dir="$VE_WS/devel/lib/vitamin_e"
 py=/usr/bin/python3
 
 if [ "${VE_NO_BUILD:-0}" != 1 ]; then
-  ve_info "1/4 building (./scripts/build.sh)"
+  ve_info "1/5 building (./scripts/build.sh)"
   "$VE_ROOT/scripts/build.sh" || ve_die "the build failed (see above)"
 fi
 for b in vitamin_e_make_sequence vitamin_e_evaluate; do
@@ -40,7 +42,7 @@ done
 # 2. The sequence: reuse it if complete and made with the same settings.
 settings="frames=$frames seed=$seed rate=20 size=752x480 distortion=euroc"
 if [ "$fresh" = 1 ] || [ ! -f "$seq/.demo_settings" ] || [ "$(cat "$seq/.demo_settings")" != "$settings" ]; then
-  ve_info "2/4 rendering $frames frames (752x480, 20 Hz, seed $seed) into $seq"
+  ve_info "2/5 rendering $frames frames (752x480, 20 Hz, seed $seed) into $seq"
   rm -rf "$seq.partial"
   "$bin_dir/vitamin_e_make_sequence" --out "$seq.partial" --frames "$frames" --rate-hz 20 \
     --width 752 --height 480 --seed "$seed" --distortion euroc
@@ -48,10 +50,10 @@ if [ "$fresh" = 1 ] || [ ! -f "$seq/.demo_settings" ] || [ "$(cat "$seq/.demo_se
   rm -rf "$seq"
   mv "$seq.partial" "$seq"
 else
-  ve_info "2/4 reusing $seq ($settings; --fresh renders it again)"
+  ve_info "2/5 reusing $seq ($settings; --fresh renders it again)"
 fi
 
-ve_info "3/4 running VITAMIN-E (./scripts/run_dataset.sh $seq $run)"
+ve_info "3/5 running VITAMIN-E (./scripts/run_dataset.sh $seq $run)"
 rm -rf "$run"
 VE_NO_BUILD=1 "$VE_ROOT/scripts/run_dataset.sh" "$seq" "$run" \
   || ve_die "the run failed (see the messages above); nothing to evaluate"
@@ -63,7 +65,7 @@ if [ -f "$stats" ]; then
   n_frames="$("$py" -c 'import json,sys; print(json.load(open(sys.argv[1])).get("frames", sys.argv[2]))' "$stats" "$frames")"
 fi
 
-ve_info "4/4 evaluating against the ground truth"
+ve_info "4/5 evaluating against the ground truth"
 eval_ok=0
 if [ ! -f "$traj" ] || ! grep -qv '^[[:space:]]*\(#.*\)\?$' "$traj"; then
   echo
@@ -111,3 +113,30 @@ if t:
 PYEOF
 fi
 [ "$eval_ok" = 1 ] || exit 1
+
+# 5. The same sequence through ROS: a EuRoC-style bag played into the tracking and
+# meshing nodelets (headless, at the camera rate), trajectory and mesh saved on
+# shutdown. VE_NO_ROS=1 skips it.
+if [ "${VE_NO_ROS:-0}" != 1 ]; then
+  ve_info "5/5 the same through ROS: bag -> euroc.launch (nodelets, rate 1.0) -> trajectory and mesh"
+  ros_out="$out/ros"
+  rm -rf "$ros_out" && mkdir -p "$ros_out"
+  "$VE_ROOT/scripts/make_bag.sh" "$seq" "$ros_out/sequence.bag" >"$ros_out/make_bag.log" 2>&1 \
+    || ve_die "make_bag.sh failed (log: $ros_out/make_bag.log)"
+  timeout 600 "$VE_ROOT/scripts/ros.sh" roslaunch vitamin_e euroc.launch bag:="$ros_out/sequence.bag" \
+      rviz:=false calibration_file:="$seq/mav0/cam0/sensor.yaml" trajectory_file:="$ros_out/trajectory.txt" \
+      mesh_file:="$ros_out/mesh.ply" </dev/null >"$ros_out/roslaunch.log" 2>&1 \
+    || ve_die "roslaunch euroc.launch failed (log: $ros_out/roslaunch.log)"
+  grep -E "frames processed|written to" "$ros_out/roslaunch.log" | sed 's/^/  /' || true
+  if [ -s "$ros_out/trajectory.txt" ] && "$VE_ROOT/scripts/evaluate.sh" "$ros_out/trajectory.txt" \
+      "$seq/groundtruth_cam0_tum.txt" --frames "$n_frames" >"$ros_out/evaluation.txt" 2>&1; then
+    "$py" - "$(tail -n 1 "$ros_out/evaluation.txt")" <<'PYEOF'
+import json, sys
+r = json.loads(sys.argv[1])
+print("ROS: ATE RMSE %.2f cm (Sim(3)) over %d poses of %d frames; outputs in demo_output/ros/"
+      % (100 * r["ate_rmse_m"], r["matched"], r["frames"]))
+PYEOF
+  else
+    ve_die "the ROS run wrote no trajectory (log: $ros_out/roslaunch.log)"
+  fi
+fi

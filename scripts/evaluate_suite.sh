@@ -93,17 +93,17 @@ while read -r name dataset gt sensor rest; do
     fi
   fi
   ve_info "   ATE $(fmt "$ate" 100 2) cm, success $(fmt "$success" 100 1) %, retries ${retries:-n/a}, $(fmt "$ms" 1 1) ms/frame ${note}"
-  ate_cell="$(fmt "$ate" 100 1)"
+  ate_cell="$(fmt "$ate" 100 2)"
   [ -n "$note" ] && ate_cell="n/a ($note)"
   # The paper counts a run under 90 % of frames tracked as a failure.
   if [ -z "$note" ] && [ -n "$success" ] && "$py" -c 'import sys; sys.exit(0 if float(sys.argv[1]) < 0.9 else 1)' "$success"; then
     ate_cell="fail ($ate_cell cm over $(fmt "$success" 100 1) % of frames)"
   fi
-  rows+=("| $name | $ate_cell | $(fmt "$success" 100 1) | ${retries:-n/a} | $(fmt "$ms" 1 1) |")
+  rows+=("| $name | ${frames:-n/a} | $ate_cell | $(fmt "$success" 100 1) | ${retries:-n/a} | $(fmt "$ms" 1 1) |")
 done <"$list"
 
 {
-  echo "| sequence | ATE [cm] | success [%] | init retries | ms/frame |"
-  echo "|---|---|---|---|---|"
+  echo "| sequence | frames | ATE [cm] | success [%] | init retries | ms/frame |"
+  echo "|---|---|---|---|---|---|"
   for r in "${rows[@]}"; do echo "$r"; done
 } | tee "$out/results.md"
