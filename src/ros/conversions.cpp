@@ -153,6 +153,8 @@ void fillCloud(const std_msgs::Header& header, const std::vector<Eigen::Vector3f
                                 sensor_msgs::PointField::FLOAT32, "z", 1, sensor_msgs::PointField::FLOAT32,
                                 "intensity", 1, sensor_msgs::PointField::FLOAT32);
   modifier.resize(points.size());
+  // The field iterators take data.front(): undefined behaviour on an empty cloud.
+  if (points.empty()) return;
   sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x"), y(*cloud, "y"), z(*cloud, "z"),
       i(*cloud, "intensity");
   const bool has_intensity = intensity.size() == points.size();
