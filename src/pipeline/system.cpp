@@ -155,6 +155,7 @@ void System::Impl::fillResultPoints(FrameResult* result) const {
 
 void System::Impl::resetMap() {
   map.clear();
+  mapped_last_frame = 0;
   pending.clear();
   frames_since_keyframe = 0;
   state = TrackingState::kInitializing;

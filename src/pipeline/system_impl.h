@@ -74,6 +74,7 @@ struct System::Impl {
   std::string cur_text;
   std::vector<FrameTrack> cur_tracks;
   std::vector<map::Landmark*> cur_landmarks;  // per cur_tracks entry, null if unmapped
+  std::size_t mapped_last_frame = 0;  // map points tracked in the last tracked frame
   Eigen::Isometry3d T_w_cur = Eigen::Isometry3d::Identity();
 
   // motion model

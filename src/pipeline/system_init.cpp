@@ -127,6 +127,9 @@ void System::Impl::initialize(FrameResult* result) {
   have_last_pose = true;
   initialized_once = true;
   pending.clear();
+  refreshCurrentLandmarks();
+  mapped_last_frame = 0;
+  for (map::Landmark* l : cur_landmarks) mapped_last_frame += l ? 1 : 0;
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_cur;

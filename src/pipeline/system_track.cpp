@@ -15,8 +15,8 @@ void System::Impl::track(FrameResult* result) {
   refreshCurrentLandmarks();
   // Most map points of the previous frame gone at once (a cut, a sudden flip, a
   // covered lens): the few tracks left are not trusted for a pose.
-  std::size_t seen_before = 0, seen_now = 0;
-  for (const auto& kv : map.landmarks()) seen_before += kv.second.last_seen_frame + 1 == frame_index ? 1 : 0;
+  const std::size_t seen_before = mapped_last_frame;
+  std::size_t seen_now = 0;
   for (map::Landmark* l : cur_landmarks) seen_now += l ? 1 : 0;
   const bool vanished = seen_before >= 100 && seen_now * 5 < seen_before;
   for (map::Landmark* l : cur_landmarks) {
@@ -101,6 +101,8 @@ void System::Impl::track(FrameResult* result) {
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_cur;
+  mapped_last_frame = 0;
+  for (map::Landmark* l : cur_landmarks) mapped_last_frame += l ? 1 : 0;
 }
 
 bool System::Impl::estimatePose(Eigen::Isometry3d* T_w_c, std::string* why) {
