@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "vitamin_e/eval/metrics.h"
 
 namespace ve = vitamin_e::eval;
@@ -38,17 +39,8 @@ const char* kUsage =
     "  --gt-out F        write the ground truth as used (TUM, camera poses) to F\n"
     "  --errors-out F    write 't_estimate position_error_m' per matched pose to F\n";
 
-[[noreturn]] void fail(const std::string& msg) {
-  std::cerr << "error: " << msg << "\n";
-  std::exit(2);
-}
-
-double parseDouble(const std::string& key, const std::string& v) {
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0') fail(key + " expects a number, got '" + v + "'");
-  return d;
-}
+using vitamin_e::cli::fail;
+using vitamin_e::cli::parseDouble;
 
 }  // namespace
 

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <string>
 
+#include "cli.h"
 #include "vitamin_e/synth/sequence.h"
 
 namespace {
@@ -31,17 +32,8 @@ const char* kUsage =
     "  --texel M          texture resolution in metres (default 0.005)\n"
     "  --boxes N          number of boxes in the room (default 6)\n";
 
-[[noreturn]] void fail(const std::string& msg) {
-  std::cerr << "error: " << msg << "\n";
-  std::exit(2);
-}
-
-double number(const std::string& key, const std::string& v) {
-  char* end = nullptr;
-  const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0') fail(key + " expects a number, got '" + v + "'");
-  return d;
-}
+using vitamin_e::cli::fail;
+const auto number = vitamin_e::cli::parseDouble;
 
 int integer(const std::string& key, const std::string& v) {
   const double d = number(key, v);

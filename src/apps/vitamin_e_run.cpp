@@ -20,6 +20,7 @@
 #include <mutex>
 #include <string>
 
+#include "cli.h"
 #include "vitamin_e/io/dataset.h"
 #include "vitamin_e/io/run_report.h"
 #include "vitamin_e/fusion/dense_mapper.h"
@@ -67,10 +68,7 @@ void installSignalHandlers() {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
-[[noreturn]] void fail(const std::string& msg) {
-  std::cerr << "error: " << msg << std::endl;
-  std::exit(2);
-}
+using vitamin_e::cli::fail;
 
 struct Options {
   std::string dataset, out, config, calib, topic = "/cam0/image_raw";
