@@ -9,6 +9,8 @@
 # Each sequence runs `./scripts/run_dataset.sh DATASET OUT/NAME` (writes
 # trajectory.txt and stats.json), then `./scripts/evaluate.sh` (Sim(3) ATE).
 # OUT defaults to out/suite. The table also goes to OUT/results.md.
+# Columns: success = tracked / all frames (the paper's); after init = tracked /
+# frames from the first localized one on; peak RSS of the whole run.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -74,6 +76,8 @@ while read -r name dataset gt sensor rest; do
   retries="$(json_get "$run/stats.json" init_retries)"
   ms="$(json_get "$run/stats.json" timing_ms.total.mean)"
   stats_success="$(json_get "$run/stats.json" success_rate)"
+  after_init="$(json_get "$run/stats.json" success_after_init)"
+  rss="$(json_get "$run/stats.json" peak_rss_mb)"
   ate="" success="$stats_success" note=""
   if [ "$run_rc" -ne 0 ]; then
     note="run failed (exit $run_rc, log: $run/run.log)"
@@ -99,11 +103,11 @@ while read -r name dataset gt sensor rest; do
   if [ -z "$note" ] && [ -n "$success" ] && "$py" -c 'import sys; sys.exit(0 if float(sys.argv[1]) < 0.9 else 1)' "$success"; then
     ate_cell="fail ($ate_cell cm over $(fmt "$success" 100 1) % of frames)"
   fi
-  rows+=("| $name | ${frames:-n/a} | $ate_cell | $(fmt "$success" 100 1) | ${retries:-n/a} | $(fmt "$ms" 1 1) |")
+  rows+=("| $name | ${frames:-n/a} | $ate_cell | $(fmt "$success" 100 1) | $(fmt "$after_init" 100 1) | ${retries:-n/a} | $(fmt "$ms" 1 1) | $(fmt "$rss" 1 0) |")
 done <"$list"
 
 {
-  echo "| sequence | frames | ATE [cm] | success [%] | init retries | ms/frame |"
-  echo "|---|---|---|---|---|---|"
+  echo "| sequence | frames | ATE [cm] | success [%] | after init [%] | init retries | ms/frame | peak RSS [MB] |"
+  echo "|---|---|---|---|---|---|---|---|"
   for r in "${rows[@]}"; do echo "$r"; done
 } | tee "$out/results.md"

@@ -317,6 +317,7 @@ int run(const Options& o) {
   // Frames seen while initializing are localized once the map exists: the
   // system's count (= trajectory poses) is the number of tracked frames.
   stats.tracked_frames = system.framesTracked();
+  stats.first_localized_frame = system.firstLocalizedFrame();
 
   std::string err;
   const std::vector<pl::MapPoint3> points = system.mapPoints();

@@ -65,6 +65,7 @@ struct System::Impl {
   std::uint64_t frame_index = 0;  // index of the frame being mapped
   std::uint64_t frames_processed = 0;
   std::uint64_t frames_tracked = 0;
+  long long first_localized_frame = -1;  // earliest frame index with a recorded pose
   int init_retries = 0;
   bool initialized_once = false;
   TrackingState state = TrackingState::kInitializing;

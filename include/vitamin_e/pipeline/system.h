@@ -51,6 +51,9 @@ class System {
 
   std::size_t framesProcessed() const;
   std::size_t framesTracked() const;
+  // Index (0 = the first frame given to process()) of the earliest frame with a
+  // pose in the trajectory; -1 while there is none.
+  long long firstLocalizedFrame() const;
   int initRetries() const;
   const StageTimings& timings() const;
   const SystemConfig& config() const;
