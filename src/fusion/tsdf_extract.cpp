@@ -1,76 +1,12 @@
-// Incremental marching tetrahedra over the hashed TSDF blocks.
+// Incremental marching cubes over the hashed TSDF blocks.
 #include <algorithm>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "tsdf_impl.h"
+#include "vitamin_e/fusion/marching_cubes.h"
 
 namespace vitamin_e::fusion {
-
-namespace {
-
-// Freudenthal split of the unit cube: corner c = x + 2y + 4z; tetrahedron k is the
-// monotone path 0 -> e_i -> e_i + e_j -> 7 for the k-th permutation (i, j) of axes.
-constexpr int kTets[6][4] = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}};
-
-struct Corner {
-  float sdf;
-  Eigen::Vector3f p;  // world position of the voxel centre
-  Eigen::Vector3i g;  // global voxel index
-  int bits;           // corner index in the cube
-};
-
-// Vertex on the tetrahedron edge (a, b): identity from the lower corner and the direction.
-struct EdgeVertex {
-  std::uint64_t key;
-  Eigen::Vector3f p;
-};
-
-EdgeVertex edgeVertex(const Corner& a, const Corner& b) {
-  const Corner& lo = (a.bits & b.bits) == a.bits ? a : b;  // corner bits of lo are a subset of hi's
-  const Corner& hi = (&lo == &a) ? b : a;
-  const float t = lo.sdf / (lo.sdf - hi.sdf);
-  EdgeVertex v;
-  v.key = (packIndex(lo.g) << 3) ^ static_cast<std::uint64_t>(lo.bits ^ hi.bits);
-  v.p = lo.p + t * (hi.p - lo.p);
-  return v;
-}
-
-double orient3d(const Corner& a, const Corner& b, const Corner& c, const Corner& d) {
-  return (b.p - a.p).cross(c.p - a.p).dot(d.p - a.p);
-}
-
-void emit(std::vector<CachedTriangle>* out, const EdgeVertex& v0, const EdgeVertex& v1, const EdgeVertex& v2) {
-  out->push_back({{v0.key, v1.key, v2.key}, {v0.p, v1.p, v2.p}});
-}
-
-// Triangles of the zero level set in one tetrahedron, normals pointing to sdf > 0.
-void polygonizeTet(const Corner* c[4], std::vector<CachedTriangle>* out) {
-  int neg[4], pos[4], nn = 0, np = 0;
-  for (int i = 0; i < 4; ++i) (c[i]->sdf < 0.0f ? neg[nn++] : pos[np++]) = i;
-  if (nn == 0 || np == 0) return;
-  if (nn == 1 || np == 1) {
-    // Lone corner a; the triangle cuts its three edges. Facing away from a if a
-    // is inside (negative), towards a otherwise.
-    const int a = nn == 1 ? neg[0] : pos[0];
-    int o[3], k = 0;
-    for (int i = 0; i < 4; ++i)
-      if (i != a) o[k++] = i;
-    const bool away = nn == 1;
-    if ((orient3d(*c[a], *c[o[0]], *c[o[1]], *c[o[2]]) > 0.0) != away) std::swap(o[1], o[2]);
-    emit(out, edgeVertex(*c[a], *c[o[0]]), edgeVertex(*c[a], *c[o[1]]), edgeVertex(*c[a], *c[o[2]]));
-    return;
-  }
-  // Two inside (a, b), two outside (p, q): quad (a,p) (a,q) (b,q) (b,p).
-  int a = neg[0], b = neg[1], p = pos[0], q = pos[1];
-  if (orient3d(*c[a], *c[b], *c[p], *c[q]) < 0.0) std::swap(p, q);
-  const EdgeVertex v0 = edgeVertex(*c[a], *c[p]), v1 = edgeVertex(*c[a], *c[q]);
-  const EdgeVertex v2 = edgeVertex(*c[b], *c[q]), v3 = edgeVertex(*c[b], *c[p]);
-  emit(out, v0, v1, v2);
-  emit(out, v0, v2, v3);
-}
-
-}  // namespace
 
 void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const {
   block->triangles.clear();
@@ -85,29 +21,62 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
     if (!blk) return nullptr;
     return &blk->voxels[static_cast<std::size_t>((x - bx * n) + n * ((y - by * n) + n * (z - bz * n)))];
   };
-  Corner corners[8];
+  float sdf[8];
   for (int z = 0; z < n; ++z) {
     for (int y = 0; y < n; ++y) {
       for (int x = 0; x < n; ++x) {
-        bool ok = true, has_neg = false, has_pos = false;
+        // Cube with lower corner voxel (x, y, z); every corner must be observed.
+        int mask = 0;
+        bool ok = true;
         for (int k = 0; k < 8 && ok; ++k) {
-          const int ox = k & 1, oy = (k >> 1) & 1, oz = (k >> 2) & 1;
-          const Voxel* v = voxel(x + ox, y + oy, z + oz);
+          const Voxel* v = voxel(x + (k & 1), y + ((k >> 1) & 1), z + ((k >> 2) & 1));
           if (!v || v->weight < min_w) {
             ok = false;
             break;
           }
-          Corner& c = corners[k];
-          c.sdf = v->sdf;
-          c.bits = k;
-          c.g = b * n + Eigen::Vector3i(x + ox, y + oy, z + oz);
-          (c.sdf < 0.0f ? has_neg : has_pos) = true;
+          sdf[k] = v->sdf;
+          if (sdf[k] < 0.0f) mask |= 1 << k;
         }
-        if (!ok || !has_neg || !has_pos) continue;
-        for (auto& c : corners) c.p = (c.g.cast<float>().array() + 0.5f).matrix() * vs;
-        for (const auto& tet : kTets) {
-          const Corner* tc[4] = {&corners[tet[0]], &corners[tet[1]], &corners[tet[2]], &corners[tet[3]]};
-          polygonizeTet(tc, &block->triangles);
+        if (!ok || mask == 0 || mask == 255) continue;
+        const Eigen::Vector3i g0 = b * n + Eigen::Vector3i(x, y, z);  // global index of corner 0
+        const std::uint64_t cube_key = packIndex(g0) << 3;
+        std::uint64_t key[12 + mc::kMaxCentroids];
+        Eigen::Vector3f pos[12 + mc::kMaxCentroids];
+        int done = 0;  // bit i: vertex i computed
+        auto edgeVertex = [&](int e) {
+          if (done & (1 << e)) return;
+          // Identity: the edge's lower voxel and its axis (shared across cubes and blocks).
+          const int axis = mc::edgeAxis(e), lo = mc::edgeLowerCorner(e), hi = lo | (1 << axis);
+          const Eigen::Vector3i g = g0 + Eigen::Vector3i(lo & 1, (lo >> 1) & 1, (lo >> 2) & 1);
+          const float s = sdf[lo] / (sdf[lo] - sdf[hi]);
+          Eigen::Vector3f p = (g.cast<float>().array() + 0.5f).matrix();
+          p[axis] += s;
+          key[e] = (packIndex(g) << 3) ^ static_cast<std::uint64_t>(1 << axis);
+          pos[e] = p * vs;
+          done |= 1 << e;
+        };
+        for (const std::int8_t* t = mc::caseTriangles(mask); *t >= 0; t += 3) {
+          CachedTriangle tri;
+          for (int k = 0; k < 3; ++k) {
+            const int e = t[k];
+            if (e < 12) {
+              edgeVertex(e);
+            } else if (!(done & (1 << e))) {
+              // Centroid of a loop: this cube's own vertex (low bits 0, 3, 5: no edge uses them).
+              constexpr std::uint64_t kTag[mc::kMaxCentroids] = {0, 3, 5};
+              const std::uint16_t edges = mc::centroidEdges(mask, e - 12);
+              Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+              int cnt = 0;
+              for (int q = 0; q < 12; ++q)
+                if (edges & (1u << q)) edgeVertex(q), sum += pos[q], ++cnt;
+              pos[e] = sum / static_cast<float>(cnt);
+              key[e] = cube_key ^ kTag[e - 12];
+              done |= 1 << e;
+            }
+            tri.key[k] = key[e];
+            tri.p[k] = pos[e];
+          }
+          block->triangles.push_back(tri);
         }
       }
     }

@@ -1,6 +1,6 @@
 #pragma once
 // Private state of TsdfVolume, shared by tsdf_volume.cpp (integration) and
-// tsdf_extract.cpp (marching tetrahedra).
+// tsdf_extract.cpp (marching cubes).
 #include <array>
 #include <cstdint>
 #include <memory>

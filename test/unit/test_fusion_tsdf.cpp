@@ -1,4 +1,4 @@
-// TSDF integration and marching tetrahedra on synthetic spheres and planes.
+// TSDF integration and marching cubes on synthetic spheres and planes.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -4,7 +4,7 @@
 // pinhole image (meshing::FrameMesher) -> NLTGV2-L1 smoothing of the inverse
 // depths (meshing::NltgvDenoiser, warm-started by track id) -> pruning of bad
 // triangles -> TSDF fusion (fusion::TsdfIntegrator, on its own thread unless
-// configured synchronous) -> marching tetrahedra on demand. Used by the offline
+// configured synchronous) -> marching cubes on demand. Used by the offline
 // runner and the ROS meshing nodelet.
 #include <Eigen/Geometry>
 #include <cstdint>

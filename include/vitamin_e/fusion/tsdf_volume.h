@@ -6,10 +6,10 @@
 // exact for planar triangles), then updates every voxel of the blocks near the
 // surface with the projective signed distance along the ray, truncated, as a
 // running weighted average (weight capped at max_weight). extractMesh() runs
-// marching tetrahedra (each cube split into 6 tetrahedra around its main
-// diagonal: watertight, no ambiguous cases) on the blocks that changed since
-// the last call (and their lower neighbours, which read their voxels), reusing
-// the cached triangles of the other blocks; vertices are shared across cubes and
+// marching cubes (fusion/marching_cubes.h: ambiguous faces resolved from their
+// own corner signs, so watertight) on the blocks that changed since the last
+// call (and their lower neighbours, which read their voxels), reusing the
+// cached triangles of the other blocks; vertices are shared across cubes and
 // blocks, so a closed surface gives a closed mesh.
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -69,7 +69,7 @@ class TsdfVolume {
   // Rasterises a mesh into a depth map (row-major, 0 where empty) of K's size.
   static std::vector<float> rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeIntrinsics& K);
 
-  // Re-runs marching tetrahedra on the blocks changed since the last update
+  // Re-runs marching cubes on the blocks changed since the last update
   // (the incremental part); returns the number of blocks re-meshed.
   std::size_t updateMesh();
   // updateMesh(), then assembles the cached per-block triangles into one
