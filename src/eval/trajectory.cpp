@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 namespace vitamin_e::eval {
@@ -66,6 +67,25 @@ Eigen::Isometry3d makePose(const Eigen::Vector3d& p, Eigen::Quaterniond q, const
   return T;
 }
 
+// Calls on_line(numbers, line_no) for every non-empty, non-comment line of the
+// file; a line that is not all numbers, or has a count outside [min_count,
+// max_count], throws naming the file, the line and `expected`.
+template <typename OnLine>
+void forEachNumberLine(const std::string& path, std::size_t min_count, std::size_t max_count,
+                       const std::string& expected, OnLine on_line) {
+  auto f = openOrThrow(path);
+  std::string line;
+  std::vector<double> v;
+  int line_no = 0;
+  while (std::getline(f, line)) {
+    ++line_no;
+    const std::string s = trim(line);
+    if (s.empty() || s[0] == '#') continue;
+    if (!parseNumbers(s, &v) || v.size() < min_count || v.size() > max_count) badLine(path, line_no, expected);
+    on_line(s, v, line_no);
+  }
+}
+
 void sortByTime(Trajectory* traj) {
   std::stable_sort(traj->begin(), traj->end(),
                    [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
@@ -118,36 +138,22 @@ std::string resolveTrajectoryPath(const std::string& path) {
 }
 
 Trajectory readTum(const std::string& path) {
-  auto f = openOrThrow(path);
   Trajectory traj;
-  std::string line;
-  std::vector<double> v;
-  int line_no = 0;
-  while (std::getline(f, line)) {
-    ++line_no;
-    const std::string s = trim(line);
-    if (s.empty() || s[0] == '#') continue;
-    if (!parseNumbers(s, &v) || v.size() != 8) badLine(path, line_no, "expected 8 numbers 't tx ty tz qx qy qz qw'");
-    StampedPose sp;
-    sp.t = v[0];
-    sp.T_w_c = makePose({v[1], v[2], v[3]}, Eigen::Quaterniond(v[7], v[4], v[5], v[6]), path, line_no);
-    traj.push_back(sp);
-  }
+  forEachNumberLine(path, 8, 8, "expected 8 numbers 't tx ty tz qx qy qz qw'",
+                    [&](const std::string&, const std::vector<double>& v, int line_no) {
+                      StampedPose sp;
+                      sp.t = v[0];
+                      sp.T_w_c = makePose({v[1], v[2], v[3]}, Eigen::Quaterniond(v[7], v[4], v[5], v[6]), path,
+                                          line_no);
+                      traj.push_back(sp);
+                    });
   sortByTime(&traj);
   return traj;
 }
 
 Trajectory readEurocCsv(const std::string& path) {
-  auto f = openOrThrow(path);
   Trajectory traj;
-  std::string line;
-  std::vector<double> v;
-  int line_no = 0;
-  while (std::getline(f, line)) {
-    ++line_no;
-    const std::string s = trim(line);
-    if (s.empty() || s[0] == '#') continue;
-    if (!parseNumbers(s, &v) || v.size() < 8) badLine(path, line_no, "expected 't_ns, px, py, pz, qw, qx, qy, qz, ...'");
+  auto on_line = [&](const std::string& s, const std::vector<double>& v, int line_no) {
     // Integer nanoseconds: split to keep precision (1.4e18 ns exceeds a double's 53 bits).
     const std::string tok = trim(s.substr(0, s.find(',')));
     StampedPose sp;
@@ -158,13 +164,15 @@ Trajectory readEurocCsv(const std::string& path) {
     }
     sp.T_w_c = makePose({v[1], v[2], v[3]}, Eigen::Quaterniond(v[4], v[5], v[6], v[7]), path, line_no);
     traj.push_back(sp);
-  }
+  };
+  forEachNumberLine(path, 8, std::numeric_limits<std::size_t>::max(),
+                    "expected 't_ns, px, py, pz, qw, qx, qy, qz, ...'", on_line);
   sortByTime(&traj);
   return traj;
 }
 
 Trajectory readKitti(const std::string& path, const std::string& times_path, double period_s) {
-  auto f = openOrThrow(path);
+  openOrThrow(path);  // the poses file's error comes first
   std::vector<double> times;
   std::string tpath = times_path;
   if (tpath.empty()) {
@@ -173,27 +181,11 @@ Trajectory readKitti(const std::string& path, const std::string& times_path, dou
     if (fileExists(dir + "/times.txt")) tpath = dir + "/times.txt";
   }
   if (!tpath.empty()) {
-    auto tf = openOrThrow(tpath);
-    std::string line;
-    std::vector<double> v;
-    int line_no = 0;
-    while (std::getline(tf, line)) {
-      ++line_no;
-      const std::string s = trim(line);
-      if (s.empty() || s[0] == '#') continue;
-      if (!parseNumbers(s, &v) || v.size() != 1) badLine(tpath, line_no, "expected one timestamp per line");
-      times.push_back(v[0]);
-    }
+    forEachNumberLine(tpath, 1, 1, "expected one timestamp per line",
+                      [&](const std::string&, const std::vector<double>& v, int) { times.push_back(v[0]); });
   }
   Trajectory traj;
-  std::string line;
-  std::vector<double> v;
-  int line_no = 0;
-  while (std::getline(f, line)) {
-    ++line_no;
-    const std::string s = trim(line);
-    if (s.empty() || s[0] == '#') continue;
-    if (!parseNumbers(s, &v) || v.size() != 12) badLine(path, line_no, "expected 12 numbers (row-major 3x4 T_w_c)");
+  auto on_line = [&](const std::string&, const std::vector<double>& v, int line_no) {
     Eigen::Matrix3d R;
     R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
     // Re-orthonormalize (KITTI files have ~1e-6 rounding).
@@ -211,7 +203,8 @@ Trajectory readKitti(const std::string& path, const std::string& times_path, dou
     sp.T_w_c.linear() = R;
     sp.T_w_c.translation() = Eigen::Vector3d(v[3], v[7], v[11]);
     traj.push_back(sp);
-  }
+  };
+  forEachNumberLine(path, 12, 12, "expected 12 numbers (row-major 3x4 T_w_c)", on_line);
   sortByTime(&traj);
   return traj;
 }
