@@ -1,20 +1,32 @@
 // Benchmark of the dense reconstruction (Delaunay meshing, NLTGV2-L1, TSDF) on a
 // render of /work/shared/tools/render_sequence.py with exact ground truth.
-//   bench_fusion_dense RENDER_DIR [--trajectory TRAJ] [--step N] [--max-frames N]
-//       [--points N] [--noise REL] [--outliers RATE] [--no-nltgv] [--out DIR]
-//       [--max-depth-2p5 M] [--weight-ref M] [--no-warm] [--nltgv-iters N] [--beta B] [--lambda L]
-// The 2.5 cm volume integrates depths <= --max-depth-2p5 (default 6 m) and its
-// completeness is measured on surface points seen within that range.
-// Frame source (until the SLAM pipeline feeds it): OpenCV KLT tracks (stable ids)
-// topped up with goodFeaturesToTrack on the rendered images; each track's depth
-// is ray cast into the true scene from the ground-truth pose, then perturbed
-// (REL inverse-depth noise, RATE outliers). --trajectory: integrate with these
-// T_w_c poses (TUM, matched by timestamp) instead of the ground truth.
-// To plug in SLAM output, fill a FrameInput per frame (see processFrame).
+//   bench_fusion_dense RENDER_DIR [--config YAML] [--gt-input] [--step N] [--max-frames N]
+//       [--voxel-lo M] [--voxel-hi M] [--max-depth-2p5 M] [--weight-ref M] [--out DIR]
+//       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--beta B] [--lambda L]
+//       GT input only: [--points N] [--noise REL] [--outliers RATE]
+// Default (SLAM input): runs pipeline::System (sequential, as vitamin_e_run) on
+// every frame of the render with --config; every --step-th tracked frame's
+// triangulated points (camera frame, map units) and pose go through the dense
+// reconstruction exactly as in fusion::DenseMapper (config `dense` section:
+// Delaunay -> NLTGV -> pruning), fused in two TSDF volumes. The SLAM
+// trajectory is aligned to the ground truth by Sim(3) (Umeyama); its scale s
+// (metres per map unit) converts the voxel sizes, truncations and depth limits
+// given here in metres into map units, and the fused meshes are mapped by the
+// same Sim(3) into the ground-truth frame before they are measured.
+// --gt-input: ground-truth poses; points from OpenCV KLT tracks (stable ids)
+// topped up with goodFeaturesToTrack, depth ray cast into the true scene and
+// perturbed (REL inverse-depth noise, RATE outliers); the bench's own lenient
+// build / strict prune filters.
+// Depth errors: every vertex (and every 6th pixel of the rasterized mesh) is
+// compared with the depth ray cast from the ground-truth pose through the same
+// pinhole pixel; estimated depths are scaled by s. The 2.5 cm volume integrates
+// depths <= --max-depth-2p5 (metres) and completeness is measured on surface
+// points seen within that range from the ground-truth poses of the used frames.
 // Prints per-stage timings and, as the last line, a JSON summary.
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <unordered_map>
@@ -25,6 +37,9 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "dense_bench_scene.h"
+#include "vitamin_e/eval/alignment.h"
+#include "vitamin_e/io/dataset.h"
+#include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/common/timing.h"
 #include "vitamin_e/eval/trajectory.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
@@ -39,25 +54,30 @@ using Eigen::Vector3d;
 namespace {
 
 struct Args {
-  std::string dir, trajectory, out;
+  std::string dir, config, out;
+  bool gt_input = false;
   int step = 3, max_frames = 0, points = 5000;
   double noise = 0.01, outliers = 0.02;
   bool nltgv = true;
-  double max_depth_hi = 6.0, weight_ref = 3.0;
-  meshing::NltgvConfig nltgv_cfg;
+  double voxel_lo = 0.15, voxel_hi = 0.025;  // metres
+  double max_depth_hi = 6.0, weight_ref = 3.0;  // metres
+  std::vector<std::pair<std::string, std::string>> nltgv_opts;
 };
 
 Args parse(int argc, char** argv) {
   Args a;
   if (argc < 2) throw std::runtime_error("usage: bench_fusion_dense RENDER_DIR [options]");
   a.dir = argv[1];
+  // Options that change NLTGV are applied on top of the config's dense section.
+  std::vector<std::pair<std::string, std::string>> nltgv_opts;
   for (int i = 2; i < argc; ++i) {
     const std::string k = argv[i];
     auto next = [&]() -> std::string {
       if (i + 1 >= argc) throw std::runtime_error("missing value for " + k);
       return argv[++i];
     };
-    if (k == "--trajectory") a.trajectory = next();
+    if (k == "--config") a.config = next();
+    else if (k == "--gt-input") a.gt_input = true;
     else if (k == "--out") a.out = next();
     else if (k == "--step") a.step = std::stoi(next());
     else if (k == "--max-frames") a.max_frames = std::stoi(next());
@@ -65,26 +85,37 @@ Args parse(int argc, char** argv) {
     else if (k == "--noise") a.noise = std::stod(next());
     else if (k == "--outliers") a.outliers = std::stod(next());
     else if (k == "--no-nltgv") a.nltgv = false;
+    else if (k == "--voxel-lo") a.voxel_lo = std::stod(next());
+    else if (k == "--voxel-hi") a.voxel_hi = std::stod(next());
     else if (k == "--max-depth-2p5") a.max_depth_hi = std::stod(next());
     else if (k == "--weight-ref") a.weight_ref = std::stod(next());
-    else if (k == "--no-warm") a.nltgv_cfg.warm_start = false;
-    else if (k == "--warm-duals-only") a.nltgv_cfg.warm_start_primal = false;
-    else if (k == "--warm-iters") a.nltgv_cfg.warm_iterations = std::stoi(next());
-    else if (k == "--nltgv-iters") a.nltgv_cfg.iterations = std::stoi(next());
-    else if (k == "--beta") a.nltgv_cfg.beta = std::stod(next());
-    else if (k == "--lambda") a.nltgv_cfg.lambda = std::stod(next());
+    else if (k == "--no-warm" || k == "--warm-duals-only") nltgv_opts.emplace_back(k, "");
+    else if (k == "--warm-iters" || k == "--nltgv-iters" || k == "--beta" || k == "--lambda")
+      nltgv_opts.emplace_back(k, next());
     else throw std::runtime_error("unknown option " + k);
   }
+  if (a.step < 1) throw std::runtime_error("--step must be >= 1");
+  a.nltgv_opts = nltgv_opts;
   return a;
+}
+
+void applyNltgvOptions(const Args& a, meshing::NltgvConfig* c) {
+  for (const auto& [k, v] : a.nltgv_opts) {
+    if (k == "--no-warm") c->warm_start = false;
+    else if (k == "--warm-duals-only") c->warm_start_primal = false;
+    else if (k == "--warm-iters") c->warm_iterations = std::stoi(v);
+    else if (k == "--nltgv-iters") c->iterations = std::stoi(v);
+    else if (k == "--beta") c->beta = std::stod(v);
+    else if (k == "--lambda") c->lambda = std::stod(v);
+  }
 }
 
 // One frame's input to the dense reconstruction (what the SLAM pipeline provides).
 struct FrameInput {
-  Eigen::Isometry3d T_w_c;                 // pose used for integration
+  double t = 0.0;
+  Eigen::Isometry3d T_w_c;                 // pose used for integration (map frame, map units)
   std::vector<std::uint64_t> ids;
-  std::vector<Vector2d> uv;                // pinhole pixels
-  std::vector<double> depth;               // measured z (camera frame)
-  std::vector<double> true_depth;          // ground truth z (evaluation only; <= 0 unknown)
+  std::vector<Eigen::Vector3d> p_c;        // camera-frame points (map units)
   Eigen::Isometry3d T_w_c_true;            // ground-truth pose (evaluation only)
 };
 
@@ -92,6 +123,12 @@ struct FrameInput {
 double threadCpuMs() {
   timespec ts;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+double processCpuMs() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
 
@@ -174,158 +211,240 @@ struct MeshGrid {
   }
 };
 
+// Mesh in the map frame -> ground-truth frame.
+fusion::TriangleMesh transformed(const fusion::TriangleMesh& m, const eval::Sim3& S) {
+  fusion::TriangleMesh out = m;
+  const Eigen::Matrix3f R = S.R.cast<float>();
+  for (auto& v : out.vertices) v = S.apply(v.cast<double>()).cast<float>();
+  for (auto& n : out.normals) n = R * n;
+  return out;
+}
+
+const eval::StampedPose* nearestPose(const eval::Trajectory& tr, double t) {
+  auto it = std::lower_bound(tr.begin(), tr.end(), t, [](const eval::StampedPose& p, double x) { return p.t < x; });
+  const eval::StampedPose* best = nullptr;
+  for (auto c : {it, it == tr.begin() ? it : it - 1})
+    if (c != tr.end() && std::abs(c->t - t) < 0.005 && (!best || std::abs(c->t - t) < std::abs(best->t - t)))
+      best = &*c;
+  return best;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
   const Args args = parse(argc, argv);
   const Scene scene = dense_bench::loadScene(args.dir + "/scene.json");
+  const eval::Trajectory gt = eval::readTum(args.dir + "/groundtruth_cam0_tum.txt");
   meshing::PinholeIntrinsics K;
   K.fx = scene.K(0, 0), K.fy = scene.K(1, 1), K.cx = scene.K(0, 2), K.cy = scene.K(1, 2);
   K.width = scene.width, K.height = scene.height;
-  const cv::Mat Kcv = (cv::Mat_<double>(3, 3) << K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
-  const cv::Mat dist(scene.dist, true);
-  const eval::Trajectory gt = eval::readTum(args.dir + "/groundtruth_cam0_tum.txt");
-  eval::Trajectory est;
-  if (!args.trajectory.empty()) est = eval::readTrajectory(args.trajectory);
-  auto nearest = [](const eval::Trajectory& tr, double t) -> const eval::StampedPose* {
-    auto it = std::lower_bound(tr.begin(), tr.end(), t, [](const eval::StampedPose& p, double x) { return p.t < x; });
-    const eval::StampedPose* best = nullptr;
-    for (auto c : {it, it == tr.begin() ? it : it - 1})
-      if (c != tr.end() && std::abs(c->t - t) < 0.005 && (!best || std::abs(c->t - t) < std::abs(best->t - t)))
-        best = &*c;
-    return best;
-  };
-  // Images (mav0/cam0/data.csv: timestamp_ns,filename).
-  std::vector<std::pair<double, std::string>> images;
-  {
-    std::ifstream csv(args.dir + "/mav0/cam0/data.csv");
-    std::string line;
-    while (std::getline(csv, line)) {
-      if (line.empty() || line[0] == '#') continue;
-      const auto comma = line.find(',');
-      std::string name = line.substr(comma + 1);
-      name.erase(name.find_last_not_of(" \r\n") + 1);
-      images.emplace_back(std::stod(line.substr(0, comma)) * 1e-9, args.dir + "/mav0/cam0/data/" + name);
+
+  std::vector<FrameInput> frames;
+  eval::Sim3 S;  // map -> ground-truth frame (identity for --gt-input)
+  double ate_rmse = 0.0, slam_wall_ms = 0.0, slam_cpu_ms = 0.0;
+  std::size_t slam_frames = 0, slam_tracked = 0;
+  meshing::FrameMesherConfig build_cfg, prune_cfg;
+  meshing::NltgvConfig nltgv_cfg;
+  bool denoise = args.nltgv;
+  fusion::TsdfConfig run_tsdf;
+  StageTimings timings;
+  if (!args.gt_input) {
+    // ---- SLAM input: the offline runner's sequence, frame by frame ----
+    pipeline::SystemConfig config;
+    if (!args.config.empty()) config = pipeline::loadSystemConfig(args.config);
+    config.validate();
+    const auto dataset = io::openDataset(args.dir);
+    const camera::Camera& camera = dataset->calibration().camera;
+    K = meshing::pinholeIntrinsicsOf(camera);
+    build_cfg = config.dense.mesher;
+    prune_cfg = config.dense.prune;
+    nltgv_cfg = config.dense.nltgv;
+    denoise = denoise && config.dense.denoise;
+    run_tsdf = config.dense.integrator.tsdf;
+    pipeline::System slam(config, camera);
+    std::size_t n = dataset->size();
+    if (args.max_frames > 0) n = std::min(n, static_cast<std::size_t>(args.max_frames) * args.step);
+    for (std::size_t i = 0; i < n; ++i) {
+      const cv::Mat img = dataset->loadImage(i);
+      const auto t0 = std::chrono::steady_clock::now();
+      const double c0 = processCpuMs();
+      const pipeline::FrameResult r = slam.process(img, dataset->timestamp(i), dataset->timestampText(i));
+      slam_cpu_ms += processCpuMs() - c0;
+      slam_wall_ms += elapsedMs(t0);
+      ++slam_frames;
+      slam_tracked += r.pose_valid;
+      if (!r.pose_valid || i % args.step != 0) continue;
+      const eval::StampedPose* g = nearestPose(gt, r.timestamp);
+      if (!g) continue;
+      FrameInput in;
+      in.t = r.timestamp;
+      in.T_w_c = r.T_w_c;
+      in.T_w_c_true = g->T_w_c;
+      pipeline::framePointsInCamera(r, &in.ids, &in.p_c);
+      if (static_cast<int>(in.ids.size()) < config.dense.min_points) continue;
+      frames.push_back(std::move(in));
+    }
+    // Sim(3) of the final trajectory onto the ground truth.
+    eval::Trajectory est;
+    for (const auto& e : slam.trajectory()) est.push_back({e.timestamp, e.T_w_c});
+    const eval::Association assoc = eval::associate(est, gt, 0.005);
+    Eigen::Matrix3Xd src(3, assoc.size()), dst(3, assoc.size());
+    for (std::size_t k = 0; k < assoc.size(); ++k) {
+      src.col(k) = est[assoc[k].first].T_w_c.translation();
+      dst.col(k) = gt[assoc[k].second].T_w_c.translation();
+    }
+    S = eval::umeyamaAlignment(src, dst, true);
+    double se = 0.0;
+    for (std::size_t k = 0; k < assoc.size(); ++k) se += (S.apply(Vector3d(src.col(k))) - dst.col(k)).squaredNorm();
+    ate_rmse = std::sqrt(se / std::max<std::size_t>(1, assoc.size()));
+  } else {
+    // ---- ground-truth poses, KLT tracks, ray-cast noisy depth ----
+    build_cfg.max_edge_px = 40.0;  // lenient: NLTGV repairs outliers, prune() cuts afterwards
+    build_cfg.max_inv_depth_jump = 1.0;
+    build_cfg.max_normal_angle_deg = 88.0;
+    build_cfg.max_depth = 20.0;
+    prune_cfg = build_cfg;
+    prune_cfg.max_inv_depth_jump = 0.15;
+    prune_cfg.max_normal_angle_deg = 80.0;
+    const cv::Mat Kcv = (cv::Mat_<double>(3, 3) << K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
+    const cv::Mat dist(scene.dist, true);
+    std::vector<std::pair<double, std::string>> images;  // mav0/cam0/data.csv: timestamp_ns,filename
+    {
+      std::ifstream csv(args.dir + "/mav0/cam0/data.csv");
+      std::string line;
+      while (std::getline(csv, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        const auto comma = line.find(',');
+        std::string name = line.substr(comma + 1);
+        name.erase(name.find_last_not_of(" \r\n") + 1);
+        images.emplace_back(std::stod(line.substr(0, comma)) * 1e-9, args.dir + "/mav0/cam0/data/" + name);
+      }
+    }
+    if (images.empty()) throw std::runtime_error("no images in " + args.dir + "/mav0/cam0/data.csv");
+    Tracker tracker;
+    std::mt19937 rng(42);
+    std::normal_distribution<double> N(0.0, 1.0);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    for (std::size_t f = 0; f < images.size(); f += args.step) {
+      if (args.max_frames > 0 && static_cast<int>(frames.size()) >= args.max_frames) break;
+      const eval::StampedPose* g = nearestPose(gt, images[f].first);
+      if (!g) continue;
+      const cv::Mat img = cv::imread(images[f].second, cv::IMREAD_GRAYSCALE);
+      if (img.empty()) throw std::runtime_error("cannot read " + images[f].second);
+      {
+        ScopedTimer t(&timings, "klt_tracking (input)");
+        tracker.track(img, args.points);
+      }
+      FrameInput in;
+      in.t = images[f].first;
+      in.T_w_c = in.T_w_c_true = g->T_w_c;
+      std::vector<cv::Point2f> und;
+      cv::undistortPoints(tracker.pts, und, Kcv, dist, cv::noArray(), Kcv);
+      const Vector3d o = in.T_w_c_true.translation();
+      for (std::size_t i = 0; i < und.size(); ++i) {
+        const Vector2d uv(und[i].x, und[i].y);
+        const double z = dense_bench::rayCast(scene, o, in.T_w_c_true.linear() * K.ray(uv));
+        if (!std::isfinite(z) || !K.inImage(uv)) continue;
+        double inv = (1.0 / z) * (1.0 + args.noise * N(rng));
+        if (U(rng) < args.outliers) inv = (1.0 / z) * std::exp(1.4 * U(rng) - 0.7);
+        in.ids.push_back(tracker.ids[i]);
+        in.p_c.push_back(K.backProject(uv, 1.0 / inv));
+      }
+      frames.push_back(std::move(in));
     }
   }
-  if (images.empty()) throw std::runtime_error("no images in " + args.dir + "/mav0/cam0/data.csv");
+  applyNltgvOptions(args, &nltgv_cfg);
+  if (frames.empty()) throw std::runtime_error("no frame to reconstruct (SLAM never tracked?)");
 
-  meshing::FrameMesherConfig build_cfg;  // lenient: NLTGV repairs outliers, prune() cuts afterwards
-  build_cfg.max_edge_px = 40.0;
-  build_cfg.max_inv_depth_jump = 1.0;
-  build_cfg.max_normal_angle_deg = 88.0;
-  build_cfg.max_depth = 20.0;
-  meshing::FrameMesherConfig prune_cfg = build_cfg;
-  prune_cfg.max_inv_depth_jump = 0.15;
-  prune_cfg.max_normal_angle_deg = 80.0;
-  const meshing::FrameMesher mesher(build_cfg), pruner(prune_cfg);
-  meshing::NltgvDenoiser nltgv(args.nltgv_cfg);
+  // Metric sizes -> map units (s metres per map unit).
+  const double s = S.scale;
   fusion::TsdfConfig c15, c25;
-  c15.voxel_size = 0.15, c15.truncation = 0.45, c15.block_voxels = 8;
-  c25.voxel_size = 0.025, c25.truncation = 0.075, c25.block_voxels = 8;
-  c25.max_depth = args.max_depth_hi;
-  c15.weight_depth_ref = c25.weight_depth_ref = args.weight_ref;
+  c15.voxel_size = args.voxel_lo / s, c15.truncation = 3.0 * args.voxel_lo / s, c15.block_voxels = 8;
+  c25.voxel_size = args.voxel_hi / s, c25.truncation = 3.0 * args.voxel_hi / s, c25.block_voxels = 8;
+  c15.min_depth = c25.min_depth = 0.1 / s;
+  c15.max_depth = 20.0 / s;
+  c25.max_depth = args.max_depth_hi / s;
+  c15.weight_depth_ref = c25.weight_depth_ref = args.weight_ref / s;
   fusion::TsdfVolume tsdf15(c15), tsdf25(c25);
+  // SLAM input: also the volume vitamin_e_run fuses (config dense section, map units).
+  std::unique_ptr<fusion::TsdfVolume> tsdf_run;
+  if (!args.gt_input) tsdf_run = std::make_unique<fusion::TsdfVolume>(run_tsdf);
+  const meshing::FrameMesher mesher(build_cfg), pruner(prune_cfg);
+  meshing::NltgvDenoiser nltgv(nltgv_cfg);
 
-  Tracker tracker;
-  StageTimings timings;
-  std::mt19937 rng(42);
-  std::normal_distribution<double> N(0.0, 1.0);
+  std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   std::vector<double> raw_err, smooth_err, raw_dense, smooth_dense, mesh_ms, t15_ms, t25_ms, mesh_cpu, t15_cpu,
-      t25_cpu;
+      t25_cpu, verts;
   std::vector<Vector3d> seen;  // points on true surfaces the camera saw (completeness)
-  int processed = 0;
-  for (std::size_t f = 0; f < images.size(); f += args.step) {
-    if (args.max_frames > 0 && processed >= args.max_frames) break;
-    const eval::StampedPose* g = nearest(gt, images[f].first);
-    if (!g) continue;
-    const cv::Mat img = cv::imread(images[f].second, cv::IMREAD_GRAYSCALE);
-    if (img.empty()) throw std::runtime_error("cannot read " + images[f].second);
-    {
-      ScopedTimer t(&timings, "klt_tracking (input)");
-      tracker.track(img, args.points);
-    }
-    FrameInput in;
-    in.T_w_c_true = g->T_w_c;
-    in.T_w_c = g->T_w_c;
-    if (!est.empty()) {
-      const eval::StampedPose* e = nearest(est, images[f].first);
-      if (!e) continue;
-      in.T_w_c = e->T_w_c;
-    }
-    std::vector<cv::Point2f> und;
-    cv::undistortPoints(tracker.pts, und, Kcv, dist, cv::noArray(), Kcv);
-    const Vector3d o = in.T_w_c_true.translation();
-    for (std::size_t i = 0; i < und.size(); ++i) {
-      const Vector2d uv(und[i].x, und[i].y);
-      const double z = dense_bench::rayCast(scene, o, in.T_w_c_true.linear() * K.ray(uv));
-      if (!std::isfinite(z) || !K.inImage(uv)) continue;
-      double inv = (1.0 / z) * (1.0 + args.noise * N(rng));
-      if (U(rng) < args.outliers) inv = (1.0 / z) * std::exp(1.4 * U(rng) - 0.7);
-      in.ids.push_back(tracker.ids[i]);
-      in.uv.push_back(uv);
-      in.depth.push_back(1.0 / inv);
-      in.true_depth.push_back(z);
-    }
-    // ---- the dense reconstruction of one frame ----
+  for (const FrameInput& in : frames) {
+    // ---- the dense reconstruction of one frame (as fusion::DenseMapper::addFrame) ----
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = threadCpuMs();
     meshing::FrameMesh mesh;
     {
       ScopedTimer t(&timings, "delaunay_mesh");
-      mesh = mesher.build(in.ids, in.uv, in.depth, K);
+      mesh = mesher.buildFromPoints(in.ids, in.p_c, K);
     }
     const meshing::FrameMesh raw = mesh;
-    if (args.nltgv) {
+    if (denoise && !mesh.triangles.empty()) {
       ScopedTimer t(&timings, "nltgv");
       nltgv.denoise(&mesh, K);
     }
-    meshing::FrameMesh raw_pruned = raw;
     {
       ScopedTimer t(&timings, "prune");
       pruner.prune(&mesh, K);
     }
-    pruner.prune(&raw_pruned, K);
     mesh_ms.push_back(elapsedMs(t0));
     const double c1 = threadCpuMs();
     mesh_cpu.push_back(c1 - c0);
+    meshing::FrameMesh raw_pruned = raw;
+    pruner.prune(&raw_pruned, K);
+    verts.push_back(static_cast<double>(mesh.vertices.size()));
     const auto t1 = std::chrono::steady_clock::now();
+    const double c1b = threadCpuMs();
     tsdf15.integrate(mesh, in.T_w_c, K);
     tsdf15.updateMesh();
     t15_ms.push_back(elapsedMs(t1));
     const double c2 = threadCpuMs();
-    t15_cpu.push_back(c2 - c1);
+    t15_cpu.push_back(c2 - c1b);
     const auto t2 = std::chrono::steady_clock::now();
     tsdf25.integrate(mesh, in.T_w_c, K);
     const double int25 = elapsedMs(t2);
     tsdf25.updateMesh();
     t25_ms.push_back(elapsedMs(t2));
     t25_cpu.push_back(threadCpuMs() - c2);
+    if (tsdf_run) tsdf_run->integrate(mesh, in.T_w_c, K);
     timings.add("tsdf15_integrate+mc", t15_ms.back());
     timings.add("tsdf2.5_integrate", int25);
     timings.add("tsdf2.5_mc", t25_ms.back() - int25);
-    // ---- evaluation ----
-    std::unordered_map<std::uint64_t, double> truth;
-    for (std::size_t i = 0; i < in.ids.size(); ++i) truth[in.ids[i]] = in.true_depth[i];
-    for (const auto& v : raw.vertices) raw_err.push_back(std::abs(1.0 / v.inv_depth - truth[v.id]) / truth[v.id]);
-    for (const auto& v : mesh.vertices) smooth_err.push_back(std::abs(1.0 / v.inv_depth - truth[v.id]) / truth[v.id]);
+    // ---- evaluation: depths along the same pinhole pixel from the true pose ----
+    const Vector3d o = in.T_w_c_true.translation();
+    const Eigen::Matrix3d R = in.T_w_c_true.linear();
+    auto true_z = [&](const Vector2d& uv) { return dense_bench::rayCast(scene, o, R * K.ray(uv)); };
+    auto vertex_err = [&](const meshing::FrameMesh& m, std::vector<double>* out) {
+      for (const auto& v : m.vertices) {
+        const double z = true_z(v.uv);
+        if (std::isfinite(z) && v.inv_depth > 0.0) out->push_back(std::abs(s / v.inv_depth - z) / z);
+      }
+    };
+    vertex_err(raw, &raw_err);
+    vertex_err(mesh, &smooth_err);
     const auto d_raw = fusion::TsdfVolume::rasterizeDepth(raw_pruned, K);
     const auto d_smooth = fusion::TsdfVolume::rasterizeDepth(mesh, K);
     for (int v = 0; v < K.height; v += 6)
       for (int u = 0; u < K.width; u += 6) {
         const std::size_t idx = static_cast<std::size_t>(v) * K.width + u;
-        const double z = dense_bench::rayCast(scene, o, in.T_w_c_true.linear() * K.ray(Vector2d(u, v)));
+        const double z = true_z(Vector2d(u, v));
         if (!std::isfinite(z)) continue;
         if (d_raw[idx] > 0 && d_smooth[idx] > 0) {  // pixels covered by both meshes
-          raw_dense.push_back(std::abs(d_raw[idx] - z) / z);
-          smooth_dense.push_back(std::abs(d_smooth[idx] - z) / z);
+          raw_dense.push_back(std::abs(s * d_raw[idx] - z) / z);
+          smooth_dense.push_back(std::abs(s * d_smooth[idx] - z) / z);
         }
-        if (z <= c25.max_depth && U(rng) < 0.05) seen.push_back(o + in.T_w_c_true.linear() * K.ray(Vector2d(u, v)) * z);
+        if (z <= args.max_depth_hi && U(rng) < 0.05) seen.push_back(o + R * K.ray(Vector2d(u, v)) * z);
       }
-    ++processed;
   }
-  // ---- final meshes and metrics ----
+  // ---- final meshes (map frame -> ground-truth frame) and metrics ----
   fusion::TriangleMesh m15, m25;
   {
     ScopedTimer t(&timings, "assemble_mesh_15cm (once)");
@@ -335,6 +454,10 @@ int main(int argc, char** argv) try {
     ScopedTimer t(&timings, "assemble_mesh_2.5cm (once)");
     m25 = tsdf25.extractMesh();
   }
+  m15 = transformed(m15, S);
+  m25 = transformed(m25, S);
+  fusion::TriangleMesh mrun;
+  if (tsdf_run) mrun = transformed(tsdf_run->extractMesh(), S);
   auto accuracy = [&](const fusion::TriangleMesh& m) {
     std::vector<double> d;
     for (const auto& p : m.vertices) d.push_back(dense_bench::surfaceDistance(scene, p.cast<double>()));
@@ -348,13 +471,27 @@ int main(int argc, char** argv) try {
   };
   const auto acc25 = accuracy(m25), acc15 = accuracy(m15);
   const double comp25 = completeness(m25), comp15 = completeness(m15);
-  if (!args.out.empty()) {
+  const auto accrun = accuracy(mrun);
+  const double comprun = tsdf_run ? completeness(mrun) : 0.0;
+  if (!args.out.empty()) {  // in the ground-truth frame (metres)
     fusion::saveMeshPly(m15, args.out + "/mesh_15cm.ply");
     fusion::saveMeshPly(m25, args.out + "/mesh_2p5cm.ply");
+    if (tsdf_run) fusion::saveMeshPly(mrun, args.out + "/mesh_runner.ply");
   }
   auto minOf = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); };
-  std::printf("frames processed: %d (every %d of %zu), points/frame <= %d, noise %.3g, outliers %.3g, nltgv %s\n",
-              processed, args.step, images.size(), args.points, args.noise, args.outliers, args.nltgv ? "on" : "off");
+  if (args.gt_input) {
+    std::printf("input: ground-truth poses, KLT points <= %d, ray-cast depth, noise %.3g, outliers %.3g\n",
+                args.points, args.noise, args.outliers);
+  } else {
+    std::printf("input: SLAM (%s), %zu frames, %zu tracked; SLAM %.1f ms wall / %.1f ms process CPU per frame\n",
+                args.config.empty() ? "built-in config" : args.config.c_str(), slam_frames, slam_tracked,
+                slam_wall_ms / std::max<std::size_t>(1, slam_frames), slam_cpu_ms / std::max<std::size_t>(1, slam_frames));
+    std::printf("Sim(3) to ground truth: scale %.4f m per map unit, ATE rmse %.4f m; voxels %.4f / %.4f map units\n",
+                s, ate_rmse, c15.voxel_size, c25.voxel_size);
+  }
+  std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm)\n",
+              frames.size(), args.step, median(verts), denoise ? "on" : "off", nltgv_cfg.iterations,
+              nltgv_cfg.warm_iterations);
   std::printf("%s", timings.table().c_str());
   std::printf("wall ms/frame (min / median), thread CPU ms/frame (min / median):\n");
   std::printf("  mesh (delaunay+nltgv+prune): %7.2f / %7.2f   cpu %7.2f / %7.2f\n", minOf(mesh_ms), median(mesh_ms),
@@ -372,15 +509,22 @@ int main(int argc, char** argv) try {
               m15.vertices.size(), m15.faces.size(), median(acc15), percentile(acc15, 90), comp15);
   std::printf("mesh 2.5cm: %zu vertices %zu faces; accuracy median %.4f p90 %.4f m; completeness(5cm) %.3f (%zu pts)\n",
               m25.vertices.size(), m25.faces.size(), median(acc25), percentile(acc25, 90), comp25, seen.size());
+  if (tsdf_run)
+    std::printf("mesh as vitamin_e_run (voxel %.4g map units = %.1f mm): %zu faces; accuracy median %.4f p90 %.4f m; "
+                "completeness(5cm) %.3f\n",
+                run_tsdf.voxel_size, 1e3 * run_tsdf.voxel_size * s, mrun.faces.size(), median(accrun),
+                percentile(accrun, 90), comprun);
   std::printf(
       "{\"accuracy_median_m\":%.4f,\"accuracy_p90_m\":%.4f,\"completeness_5cm\":%.4f,\"raw_depth_err_median\":%.5f,"
       "\"nltgv_depth_err_median\":%.5f,\"mesh_ms_per_frame\":%.2f,\"tsdf_ms_15cm\":%.2f,\"tsdf_ms_2p5cm\":%.2f,"
       "\"raw_dense_depth_err_median\":%.5f,\"nltgv_dense_depth_err_median\":%.5f,\"mesh_cpu_ms_per_frame\":%.2f,"
       "\"tsdf_cpu_ms_15cm\":%.2f,\"tsdf_cpu_ms_2p5cm\":%.2f,\"accuracy_median_15cm_m\":%.4f,"
-      "\"completeness_5cm_15cm\":%.4f}\n",
+      "\"completeness_5cm_15cm\":%.4f,\"input\":\"%s\",\"sim3_scale\":%.5f,\"ate_rmse_m\":%.5f,\"frames\":%zu,"
+      "\"accuracy_median_runner_m\":%.4f,\"completeness_5cm_runner\":%.4f}\n",
       median(acc25), percentile(acc25, 90), comp25, median(raw_err), median(smooth_err), median(mesh_ms),
       median(t15_ms), median(t25_ms), median(raw_dense), median(smooth_dense), median(mesh_cpu), median(t15_cpu),
-      median(t25_cpu), median(acc15), comp15);
+      median(t25_cpu), median(acc15), comp15, args.gt_input ? "gt" : "slam", s, ate_rmse, frames.size(),
+      accrun.empty() ? 0.0 : median(accrun), comprun);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bench_fusion_dense: %s\n", e.what());

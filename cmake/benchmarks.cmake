@@ -15,3 +15,7 @@ foreach(bench_src ${VITAMIN_E_BENCHES})
     target_compile_definitions(${bench} PRIVATE VITAMIN_E_WITH_CERES=1)
   endif()
 endforeach()
+# The dense benchmark runs the SLAM system on the render (its default input).
+if(TARGET bench_fusion_dense AND TARGET vitamin_e_pipeline)
+  target_link_libraries(bench_fusion_dense vitamin_e_pipeline)
+endif()
