@@ -53,10 +53,9 @@ class SubspaceGn {
   void buildStructure();
   // Builds all blocks at the current estimate; returns the robust cost of the active part.
   double linearize();
-  // IRLS weight matrix of one residual (Hessian block J^T W J, gradient w J^T r, w = rho').
+  // IRLS: each residual's Hessian block is w J^T J and its gradient w J^T r, w = rho'(|r|^2).
   // The second-order term of Geman-McClure (rho'' < 0) is dropped, as Ceres does; using it
   // (floored to stay positive definite) was tried and converged worse on the benchmark.
-  Eigen::Matrix2d weightMatrix(const Eigen::Vector2d&, double sq, double* w) const;
   // Computes dc_, dp_ for the damping lambda from the current linearization.
   void solveStep(double lambda);
   // Eq. 12 relinearized: Gauss-Newton steps on each point alone with the cameras fixed (each
@@ -77,6 +76,10 @@ class SubspaceGn {
   geometry::Pinhole K_;
   std::vector<int> cam_var_, pt_var_, cams_, pts_;
   std::vector<int> pt_begin_, pt_obs_, obs_slot_, cam_only_obs_;
+  // Point-major copies of the active observations (pt_obs_ order): camera index and pixel, so
+  // the inner loops read contiguous memory instead of going through P_.observations.
+  std::vector<int> obs_cam_;
+  std::vector<Eigen::Vector2d> obs_uv_;
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
   int rejected_ = 0;
@@ -87,6 +90,8 @@ class SubspaceGn {
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
   std::vector<Matrix63d> Hcp_, Y_;
   std::vector<Eigen::Isometry3d> saved_cams_;
+  std::vector<std::vector<Matrix6d>> Hcc_t_;  // per-thread camera blocks (upper triangle)
+  std::vector<std::vector<Vector6d>> gc_t_;
 };
 
 }  // namespace detail

@@ -45,6 +45,12 @@ void SubspaceGn::buildStructure() {
       cam_only_obs_.push_back(static_cast<int>(k));
     }
   }
+  obs_cam_.resize(pt_obs_.size());
+  obs_uv_.resize(pt_obs_.size());
+  for (size_t a = 0; a < pt_obs_.size(); ++a) {
+    obs_cam_[a] = P_.observations[pt_obs_[a]].camera;
+    obs_uv_[a] = P_.observations[pt_obs_[a]].uv;
+  }
   obs_slot_.assign(pt_obs_.size(), -1);
   slot_begin_.assign(npf + 1, 0);
   std::vector<int> cam_count(ncf + 1, 0);
@@ -84,49 +90,74 @@ void SubspaceGn::buildStructure() {
       fixed_cost_ += baResidual(P_, o, &r) ? kernel_.rho(r.squaredNorm()) : kernel_.sigma2;
 }
 
+namespace {
+
+// H += w J^T J on the upper triangle only (H is symmetrized by the caller).
+template <int N>
+inline void addUpperJtJ(const Eigen::Matrix<double, 2, N>& J, double w, Eigen::Matrix<double, N, N>* H) {
+  for (int c = 0; c < N; ++c) {
+    const double a0 = w * J(0, c), a1 = w * J(1, c);
+    for (int r = 0; r <= c; ++r) (*H)(r, c) += a0 * J(0, r) + a1 * J(1, r);
+  }
+}
+
+template <int N>
+inline void mirrorUpper(Eigen::Matrix<double, N, N>* H) {
+  for (int c = 0; c < N; ++c)
+    for (int r = c + 1; r < N; ++r) (*H)(r, c) = (*H)(c, r);
+}
+
+}  // namespace
+
 double SubspaceGn::linearize() {
   const int ncf = freeCameras();
   const int npf = freePoints();
   cacheCameras();
   const int T = std::max(1, O_.threads);
-  std::vector<std::vector<Matrix6d>> Hcc_t(T, std::vector<Matrix6d>(ncf, Matrix6d::Zero()));
-  std::vector<std::vector<Vector6d>> gc_t(T, std::vector<Vector6d>(ncf, Vector6d::Zero()));
+  Hcc_t_.resize(T);
+  gc_t_.resize(T);
+  for (int t = 0; t < T; ++t) {
+    Hcc_t_[t].assign(ncf, Matrix6d::Zero());
+    gc_t_[t].assign(ncf, Vector6d::Zero());
+  }
   std::vector<double> cost_t(T, 0.0);
   parallelFor(npf, T, [&](int begin, int end, int t) {
     double cost = 0.0;
+    std::vector<Matrix6d>& Hcc = Hcc_t_[t];
+    std::vector<Vector6d>& gc = gc_t_[t];
     for (int j = begin; j < end; ++j) {
       Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
-      const Eigen::Vector3d& p = P_.points[pts_[j]].p_w;
+      const Eigen::Vector3d p = P_.points[pts_[j]].p_w;
       for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
-        const BaObservation& o = P_.observations[pt_obs_[a]];
-        const Eigen::Matrix3d& Rt = Rt_[o.camera];
-        const Eigen::Vector3d p_c = Rt * (p - t_[o.camera]);
+        const int c = obs_cam_[a];
+        const Eigen::Vector3d p_c = Rt_[c] * (p - t_[c]);
         const int s = obs_slot_[a];
         if (p_c.z() <= kMinDepth) {
           cost += kernel_.sigma2;
           if (s >= 0) Hcp_[s].setZero();
           continue;
         }
-        const Eigen::Vector2d r = o.uv - K_.project(p_c);
+        const Eigen::Vector2d r = obs_uv_[a] - K_.project(p_c);
         const double sq = r.squaredNorm();
         cost += kernel_.rho(sq);
-        double w;
-        const Eigen::Matrix2d W = weightMatrix(r, sq, &w);
-        geometry::Matrix23d Jp;
-        geometry::Matrix26d Jc;
-        geometry::reprojectionJacobians(K_, p_c, R_[o.camera], s >= 0 ? &Jc : nullptr, &Jp);
-        const Eigen::Matrix<double, 3, 2> JpTW = Jp.transpose() * W;
-        H.noalias() += JpTW * Jp;
-        g.noalias() += w * (Jp.transpose() * r);
+        const double w = kernel_.weight(sq);
+        const geometry::Matrix23d Jproj = K_.jacobian(p_c);
+        const geometry::Matrix23d Jp = -Jproj * Rt_[c];
+        addUpperJtJ<3>(Jp, w, &H);
+        const Eigen::Vector2d wr = w * r;
+        g.noalias() += Jp.transpose() * wr;
         if (s >= 0) {
-          const Eigen::Matrix<double, 6, 2> JcTW = Jc.transpose() * W;
+          geometry::Matrix26d Jc;
+          Jc.leftCols<3>() = Jproj;
+          Jc.rightCols<3>().noalias() = -Jproj * geometry::skew(p_c);
           const int ci = slot_cam_[s];
-          Hcc_t[t][ci].noalias() += JcTW * Jc;
-          gc_t[t][ci].noalias() += w * (Jc.transpose() * r);
-          Hcp_[s].noalias() = JcTW * Jp;
+          addUpperJtJ<6>(Jc, w, &Hcc[ci]);
+          gc[ci].noalias() += Jc.transpose() * wr;
+          Hcp_[s].noalias() = Jc.transpose() * (w * Jp);
         }
       }
+      mirrorUpper<3>(&H);
       Hpp_[j] = H;
       gp_[j] = g;
     }
@@ -135,11 +166,11 @@ double SubspaceGn::linearize() {
   double cost = 0.0;
   for (int t = 0; t < T; ++t) cost += cost_t[t];
   for (int i = 0; i < ncf; ++i) {
-    Hcc_[i].setZero();
-    gc_[i].setZero();
-    for (int t = 0; t < T; ++t) {
-      Hcc_[i] += Hcc_t[t][i];
-      gc_[i] += gc_t[t][i];
+    Hcc_[i] = Hcc_t_[0][i];
+    gc_[i] = gc_t_[0][i];
+    for (int t = 1; t < T; ++t) {
+      Hcc_[i] += Hcc_t_[t][i];
+      gc_[i] += gc_t_[t][i];
     }
   }
   // Free cameras observing fixed points.
@@ -154,19 +185,14 @@ double SubspaceGn::linearize() {
     const Eigen::Vector2d r = o.uv - K_.project(p_c);
     const double sq = r.squaredNorm();
     cost += kernel_.rho(sq);
-    double w;
-    const Eigen::Matrix2d W = weightMatrix(r, sq, &w);
+    const double w = kernel_.weight(sq);
     geometry::Matrix26d Jc;
     geometry::reprojectionJacobians(K_, p_c, R_[o.camera], &Jc, nullptr);
-    Hcc_[ci].noalias() += Jc.transpose() * W * Jc;
-    gc_[ci].noalias() += w * (Jc.transpose() * r);
+    addUpperJtJ<6>(Jc, w, &Hcc_[ci]);
+    gc_[ci].noalias() += Jc.transpose() * (w * r);
   }
+  for (int i = 0; i < ncf; ++i) mirrorUpper<6>(&Hcc_[i]);
   return cost;
-}
-
-Eigen::Matrix2d SubspaceGn::weightMatrix(const Eigen::Vector2d&, double sq, double* w) const {
-  *w = kernel_.weight(sq);
-  return *w * Eigen::Matrix2d::Identity();
 }
 
 double SubspaceGn::refinePoints(int iterations) {
@@ -180,22 +206,22 @@ double SubspaceGn::refinePoints(int iterations) {
         double c = 0.0;
         if (H) H->setZero(), g->setZero();
         for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
-          const BaObservation& o = P_.observations[pt_obs_[a]];
-          const Eigen::Vector3d p_c = Rt_[o.camera] * (x - t_[o.camera]);
+          const int cam = obs_cam_[a];
+          const Eigen::Vector3d p_c = Rt_[cam] * (x - t_[cam]);
           if (p_c.z() <= kMinDepth) {
             c += kernel_.sigma2;
             continue;
           }
-          const Eigen::Vector2d r = o.uv - K_.project(p_c);
+          const Eigen::Vector2d r = obs_uv_[a] - K_.project(p_c);
           const double sq = r.squaredNorm();
           c += kernel_.rho(sq);
           if (!H) continue;
-          geometry::Matrix23d Jp;
-          geometry::reprojectionJacobians(K_, p_c, R_[o.camera], nullptr, &Jp);
+          const geometry::Matrix23d Jp = -K_.jacobian(p_c) * Rt_[cam];
           const double w = kernel_.weight(sq);
-          H->noalias() += w * Jp.transpose() * Jp;
-          g->noalias() += w * Jp.transpose() * r;
+          addUpperJtJ<3>(Jp, w, H);
+          g->noalias() += Jp.transpose() * (w * r);
         }
+        if (H) mirrorUpper<3>(H);
         return c;
       };
       double lambda = O_.initial_lambda;
@@ -264,19 +290,25 @@ double SubspaceGn::activeCost() {
   cacheCameras();
   const int T = std::max(1, O_.threads);
   std::vector<double> cost_t(T, 0.0);
-  auto term = [&](const BaObservation& o) {
-    const Eigen::Vector3d p_c = Rt_[o.camera] * (P_.points[o.point].p_w - t_[o.camera]);
+  auto term = [&](int cam, const Eigen::Vector3d& p_w, const Eigen::Vector2d& uv) {
+    const Eigen::Vector3d p_c = Rt_[cam] * (p_w - t_[cam]);
     if (p_c.z() <= kMinDepth) return kernel_.sigma2;
-    return kernel_.rho((o.uv - K_.project(p_c)).squaredNorm());
+    return kernel_.rho((uv - K_.project(p_c)).squaredNorm());
   };
-  parallelFor(static_cast<int>(pt_obs_.size()), T, [&](int begin, int end, int t) {
+  parallelFor(freePoints(), T, [&](int begin, int end, int t) {
     double c = 0.0;
-    for (int a = begin; a < end; ++a) c += term(P_.observations[pt_obs_[a]]);
+    for (int j = begin; j < end; ++j) {
+      const Eigen::Vector3d p = P_.points[pts_[j]].p_w;
+      for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) c += term(obs_cam_[a], p, obs_uv_[a]);
+    }
     cost_t[t] = c;
   });
   double cost = 0.0;
   for (double c : cost_t) cost += c;
-  for (int k : cam_only_obs_) cost += term(P_.observations[k]);
+  for (int k : cam_only_obs_) {
+    const BaObservation& o = P_.observations[k];
+    cost += term(o.camera, P_.points[o.point].p_w, o.uv);
+  }
   return cost;
 }
 
