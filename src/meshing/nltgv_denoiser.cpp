@@ -51,8 +51,23 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
 
   // Primal: xi, wx, wy; their over-relaxed copies; measured z; steps.
   std::vector<double> z(n), xi(n), wx(n, 0.0), wy(n, 0.0), nx(n), ny(n);
+  // Solve for inverse depths relative to their median: the L1 terms are
+  // homogeneous but the primal steps and the data prox are absolute, so without
+  // this a fixed iteration count would act differently in another map unit
+  // (monocular maps have an arbitrary scale).
+  double unit = 1.0;
+  {
+    std::vector<double> m;
+    m.reserve(n);
+    for (const auto& v : V)
+      if (v.measured_inv_depth > 0.0 && std::isfinite(v.measured_inv_depth)) m.push_back(v.measured_inv_depth);
+    if (!m.empty()) {
+      std::nth_element(m.begin(), m.begin() + m.size() / 2, m.end());
+      unit = m[m.size() / 2];
+    }
+  }
   for (int i = 0; i < n; ++i) {
-    z[i] = V[i].measured_inv_depth;
+    z[i] = V[i].measured_inv_depth / unit;
     xi[i] = z[i];
     nx[i] = (V[i].uv.x() - K.cx) / K.fx;
     ny[i] = (V[i].uv.y() - K.cy) / K.fy;
@@ -192,7 +207,7 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
   }
 
   for (int i = 0; i < n; ++i)
-    if (xi[i] > 0.0 && std::isfinite(xi[i])) V[i].inv_depth = xi[i];
+    if (xi[i] > 0.0 && std::isfinite(xi[i])) V[i].inv_depth = xi[i] * unit;
   if (config_.warm_start) {
     prev_vertices_.clear();
     prev_vertices_.reserve(n);

@@ -129,6 +129,25 @@ TEST(Nltgv, WarmStartByTrackId) {
   EXPECT_EQ(denoiser.denoise(&third, testK()).warm_started, 0u);
 }
 
+TEST(Nltgv, SameResultInAnyMapUnit) {
+  // A monocular map has an arbitrary unit: depths x k must give smoothed depths x k.
+  std::vector<double> truth;
+  const FrameMesh base = noisyMesh(slantedPlane(), 0.02, 0.03, 17, &truth);
+  NltgvDenoiser reference;
+  FrameMesh ref = base;
+  reference.denoise(&ref, testK());
+  for (double k : {0.05, 20.0}) {
+    FrameMesh scaled = base;
+    for (auto& v : scaled.vertices) v.inv_depth = v.measured_inv_depth = v.measured_inv_depth / k;
+    NltgvDenoiser denoiser;
+    denoiser.denoise(&scaled, testK());
+    double worst = 0.0;
+    for (std::size_t i = 0; i < ref.vertices.size(); ++i)
+      worst = std::max(worst, std::abs(scaled.vertices[i].inv_depth * k / ref.vertices[i].inv_depth - 1.0));
+    EXPECT_LT(worst, 1e-6) << "depth unit x" << k;
+  }
+}
+
 TEST(Nltgv, ConfigValidation) {
   NltgvConfig cfg;
   cfg.lambda = 0.0;

@@ -14,6 +14,8 @@
 // Gradients start from that plane fit. Piecewise-planar surfaces are flattened
 // (affine inverse depth = plane) while steps are kept. Solved with the
 // diagonally preconditioned primal-dual algorithm of Pock & Chambolle (2011).
+// Inverse depths are solved relative to their median, so the result does not
+// depend on the map unit (alpha, beta, lambda are unit-free).
 // Warm start by track id: the edge duals, and optionally (warm_start_primal)
 // the previous relative correction xi/z and gradient (the camera moved, so the
 // previous inverse depths themselves are not reusable).
