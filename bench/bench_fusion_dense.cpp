@@ -1,7 +1,7 @@
 // Benchmark of the dense reconstruction (Delaunay meshing, NLTGV2-L1, TSDF) on a
 // render of /work/shared/tools/render_sequence.py with exact ground truth.
 //   bench_fusion_dense RENDER_DIR [--config YAML] [--gt-input] [--step N] [--max-frames N]
-//       [--voxel-lo M] [--voxel-hi M] [--max-depth-2p5 M] [--weight-ref M] [--out DIR]
+//       [--voxel-lo M] [--voxel-hi M] [--trunc-voxels N] [--max-depth-2p5 M] [--weight-ref M] [--out DIR]
 //       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--beta B] [--lambda L]
 //       GT input only: [--points N] [--noise REL] [--outliers RATE]
 // Default (SLAM input): runs pipeline::System (sequential, as vitamin_e_run) on
@@ -61,6 +61,7 @@ struct Args {
   bool nltgv = true;
   double voxel_lo = 0.15, voxel_hi = 0.025;  // metres
   double max_depth_hi = 6.0, weight_ref = 3.0;  // metres
+  double trunc_voxels = 3.0;                    // truncation band half-width in voxels
   std::vector<std::pair<std::string, std::string>> nltgv_opts;
 };
 
@@ -89,6 +90,7 @@ Args parse(int argc, char** argv) {
     else if (k == "--voxel-hi") a.voxel_hi = std::stod(next());
     else if (k == "--max-depth-2p5") a.max_depth_hi = std::stod(next());
     else if (k == "--weight-ref") a.weight_ref = std::stod(next());
+    else if (k == "--trunc-voxels") a.trunc_voxels = std::stod(next());
     else if (k == "--no-warm" || k == "--warm-duals-only") nltgv_opts.emplace_back(k, "");
     else if (k == "--warm-iters" || k == "--nltgv-iters" || k == "--beta" || k == "--lambda")
       nltgv_opts.emplace_back(k, next());
@@ -359,8 +361,8 @@ int main(int argc, char** argv) try {
   // Metric sizes -> map units (s metres per map unit).
   const double s = S.scale;
   fusion::TsdfConfig c15, c25;
-  c15.voxel_size = args.voxel_lo / s, c15.truncation = 3.0 * args.voxel_lo / s, c15.block_voxels = 8;
-  c25.voxel_size = args.voxel_hi / s, c25.truncation = 3.0 * args.voxel_hi / s, c25.block_voxels = 8;
+  c15.voxel_size = args.voxel_lo / s, c15.truncation = args.trunc_voxels * args.voxel_lo / s, c15.block_voxels = 8;
+  c25.voxel_size = args.voxel_hi / s, c25.truncation = args.trunc_voxels * args.voxel_hi / s, c25.block_voxels = 8;
   c15.min_depth = c25.min_depth = 0.1 / s;
   c15.max_depth = 20.0 / s;
   c25.max_depth = args.max_depth_hi / s;
