@@ -20,6 +20,8 @@ void BaOptions::validate() const {
   if (!(camera_gs_tolerance >= 0.0)) throw std::invalid_argument("camera_gs_tolerance must be >= 0");
   if (!(initial_lambda >= 0.0)) throw std::invalid_argument("initial_lambda must be >= 0");
   if (point_iterations < 0) throw std::invalid_argument("point_iterations must be >= 0");
+  if (point_extrapolation < 0) throw std::invalid_argument("point_extrapolation must be >= 0");
+  if (!(point_tolerance >= 0.0)) throw std::invalid_argument("point_tolerance must be >= 0");
   if (max_retries < 0) throw std::invalid_argument("max_retries must be >= 0");
 }
 

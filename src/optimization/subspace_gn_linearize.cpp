@@ -230,21 +230,32 @@ double SubspaceGn::refinePoints(int iterations) {
       for (int it = 0; it < iterations; ++it) {
         const double c0 = eval(p, &H, &g);
         bool improved = false;
+        double gain = 0.0;
         for (int attempt = 0; attempt < 3 && !improved; ++attempt) {
           Eigen::Matrix3d Hd = H;
           Hd.diagonal() = Hd.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
           const Eigen::Vector3d dp = -(Hd.inverse() * g);
-          const double c1 = eval(p + dp, nullptr, nullptr);
+          double c1 = eval(p + dp, nullptr, nullptr);
           if (c1 < c0) {
-            p += dp;
-            gain_t[t] += c0 - c1;
+            // The IRLS model over-estimates the curvature of Geman-McClure (rho'' < 0), so its
+            // steps fall short: try doubling the step while the cost keeps decreasing.
+            double scale = 1.0;
+            for (int e = 0; e < O_.point_extrapolation; ++e) {
+              const double c2 = eval(p + (2.0 * scale) * dp, nullptr, nullptr);
+              if (!(c2 < c1)) break;
+              c1 = c2;
+              scale *= 2.0;
+            }
+            p += scale * dp;
+            gain = c0 - c1;
+            gain_t[t] += gain;
             lambda *= 0.3;
             improved = true;
           } else {
             lambda *= 10.0;
           }
         }
-        if (!improved) break;
+        if (!improved || gain <= O_.point_tolerance * c0) break;
       }
       P_.points[pts_[j]].p_w = p;
     }

@@ -123,6 +123,46 @@ TEST(SubspaceGn, ThreadsGiveTheSameResult) {
   EXPECT_LT(sa.final_cost, 0.5 * sa.initial_cost);
 }
 
+TEST(SubspaceGn, PointExtrapolationReachesTheToleranceInFewerSweeps) {
+  // Geman-McClure with noise and outliers: the IRLS point steps fall short, so doubling an
+  // accepted point step must converge in fewer sweeps, to a cost no higher than without it.
+  SyntheticBa s = scene(8, 3000, 1.0, 0.05, 21);
+  BaProblem plain = s.noisy;
+  fixOldest(&plain, 5);  // like the per-frame window: the newest cameras and their points free
+  perturbBaProblem(&plain, 0.2, 0.01, 0.05, 22);
+  BaProblem extrapolated = plain;
+  BaOptions opt;
+  opt.tolerance = 1e-6;
+  opt.max_sweeps = 60;
+  opt.point_iterations = 2;
+  const BaSummary a = solveSubspaceGaussNewton(plain, opt);
+  opt.point_extrapolation = 8;
+  opt.point_tolerance = 1e-4;
+  const BaSummary b = solveSubspaceGaussNewton(extrapolated, opt);
+  EXPECT_TRUE(b.converged);
+  EXPECT_LT(b.sweeps, a.sweeps);
+  EXPECT_LT(b.final_cost, a.final_cost * (1.0 + 1e-4));
+  EXPECT_LT(cameraPositionRmse(extrapolated, s.truth), 1.1 * cameraPositionRmse(plain, s.truth) + 1e-4);
+  opt.point_extrapolation = -1;
+  EXPECT_THROW(solveSubspaceGaussNewton(extrapolated, opt), std::invalid_argument);
+}
+
+TEST(SubspaceGn, PointExtrapolationKeepsTheNoiseFreeSolution) {
+  SyntheticBa s = scene(6, 300, 0.0, 0.0, 23);
+  BaProblem p = s.truth;
+  fixOldest(&p, 2);
+  perturbBaProblem(&p, 0.5, 0.03, 0.05, 24);
+  BaOptions opt;
+  opt.tolerance = 0.0;
+  opt.max_sweeps = 100;
+  opt.point_iterations = 2;
+  opt.point_extrapolation = 8;
+  const BaSummary sum = solveSubspaceGaussNewton(p, opt);
+  EXPECT_LT(sum.final_cost, 1e-12 * sum.initial_cost);
+  EXPECT_LT(cameraPositionRmse(p, s.truth), 1e-6);
+  EXPECT_LT(maxPointError(p, s.truth), 1e-6);
+}
+
 TEST(BaWindow, FreesNewestCamerasAndTheirPoints) {
   SyntheticBa s = scene(10, 500, 1.0, 0.0, 6);
   BaWindowPolicy policy;

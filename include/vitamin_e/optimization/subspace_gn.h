@@ -24,6 +24,10 @@
 //  5. (point_iterations > 0) After an accepted step, relinearized Gauss-Newton steps on each
 //     point alone (Eq. 12 with the cameras fixed), kept per point only if its cost decreases:
 //     under Geman-McClure the slow modes are mostly single points, and these steps are cheap.
+//     The IRLS model over-estimates the curvature of Geman-McClure, so a point's step falls
+//     short; with point_extrapolation > 0 an accepted step is doubled while the point's cost
+//     keeps decreasing (a line search along the Gauss-Newton direction), and a point stops
+//     iterating once a step gains less than point_tolerance of its cost.
 // Stops when the relative cost decrease of an accepted step is below `tolerance`, when no
 // damped step decreases the cost, or after max_sweeps.
 //
@@ -56,6 +60,11 @@ struct BaOptions {
   // After each accepted sweep, this many relinearized Gauss-Newton steps on every point alone
   // (Eq. 12 with the cameras fixed; cheap, independent per point, threaded).
   int point_iterations = 1;
+  // Per point, after an accepted step: up to this many doublings of the step while its cost
+  // keeps decreasing (the IRLS steps of Geman-McClure fall short; 0 = plain Gauss-Newton).
+  int point_extrapolation = 0;
+  // A point stops iterating when a step decreases its cost by less than this fraction.
+  double point_tolerance = 0.0;
   void validate() const;         // throws std::invalid_argument naming the key
 };
 
