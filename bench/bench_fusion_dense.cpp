@@ -61,7 +61,7 @@ struct Args {
   bool nltgv = true;
   double voxel_lo = 0.15, voxel_hi = 0.025;  // metres
   double max_depth_hi = 6.0, weight_ref = 3.0;  // metres
-  double trunc_voxels = 3.0;                    // truncation band half-width in voxels
+  double trunc_voxels = 5.0;                    // truncation band half-width in voxels
   std::vector<std::pair<std::string, std::string>> nltgv_opts;
 };
 

@@ -173,7 +173,7 @@ std::vector<Field> fields(SystemConfig& c) {
 fusion::DenseMapperConfig defaultDenseConfig() {
   fusion::DenseMapperConfig d;
   d.integrator.tsdf.voxel_size = 0.02;
-  d.integrator.tsdf.truncation = 0.06;
+  d.integrator.tsdf.truncation = 0.10;  // 5 voxels: 3 leave holes at grazing angles
   d.integrator.tsdf.min_depth = 0.05;
   d.integrator.tsdf.max_depth = 10.0;
   d.mesher.min_depth = d.prune.min_depth = 0.05;

@@ -14,7 +14,7 @@
 namespace vitamin_e::pipeline {
 
 // Dense reconstruction defaults for a monocular map, whose unit is the median
-// scene depth at initialization (voxels of 2% of it, truncation 3 voxels).
+// scene depth at initialization (voxels of 2% of it, truncation 5 voxels).
 fusion::DenseMapperConfig defaultDenseConfig();
 
 struct SystemConfig {
