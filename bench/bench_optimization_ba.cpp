@@ -4,7 +4,7 @@
 // Geman-McClure loss, analytic Jacobians (the same formulas) and the same relative cost
 // tolerance; costs are reported with baCost (sum of rho in px^2).
 //   bench_optimization_ba [--quick] [--no-ceres] [--threads N] [--free-cams K] [--frames F]
-//                         [--point-iterations P]
+//                         [--point-iterations P] [--point-extrapolation E] [--point-tolerance T]
 #include <algorithm>
 #include <chrono>
 #include <ctime>
@@ -42,7 +42,12 @@ struct Args {
   int threads = 1;
   int free_cams = 3;
   int frames = 5;
-  int point_iterations = 1;
+  // Per-point refinement after each sweep (BaOptions): 2 Gauss-Newton steps per point, each
+  // accepted step doubled up to 8 times while the point's cost decreases, a point stops when a
+  // step gains < 1e-4 of its cost.
+  int point_iterations = 2;
+  int point_extrapolation = 8;
+  double point_tolerance = 1e-4;
 };
 
 std::vector<bool> freeMask(const BaProblem& p) {
@@ -73,6 +78,8 @@ void solveBoth(const BaProblem& start, const BaProblem& truth, const Args& a, Ro
   o.threads = a.threads;
   o.tolerance = 1e-6;
   o.point_iterations = a.point_iterations;
+  o.point_extrapolation = a.point_extrapolation;
+  o.point_tolerance = a.point_tolerance;
   BaProblem sgn;
   for (int budget = 0; budget < 2; ++budget) {
     BaProblem b = start;
@@ -266,8 +273,9 @@ int runAll(const Args& a) {
 #endif
   const std::vector<int> batch_sizes = a.quick ? std::vector<int>{1000} : std::vector<int>{1000, 5000, 20000, 50000};
   const std::vector<int> inc_sizes = a.quick ? std::vector<int>{5000} : std::vector<int>{5000, 20000};
-  std::printf("# threads=%d, point_iterations=%d, incremental: free newest %d cameras of a 10-camera window, %d frames\n",
-              a.threads, a.point_iterations, a.free_cams, a.frames);
+  std::printf("# threads=%d, point_iterations=%d, point_extrapolation=%d, point_tolerance=%g, incremental: free newest "
+              "%d cameras of a 10-camera window, %d frames\n",
+              a.threads, a.point_iterations, a.point_extrapolation, a.point_tolerance, a.free_cams, a.frames);
   std::printf("%-6s %4s %6s %7s | %9s %5s %12s %9s | %9s %9s %4s %12s %9s | %7s %8s\n", "kind", "cams", "points",
               "obs", "sgn_ms", "sweep", "sgn_cost", "sgn_err", "csparse", "cdense", "it", "ceres_cost", "ceres_err",
               "speedup", "cost_rel");
@@ -278,22 +286,23 @@ int runAll(const Args& a) {
     jb += (jb.empty() ? "" : ",") + jsonRow(r, true);
     std::fflush(stdout);
   }
-  double ms_per_frame = 0.0, cpu_per_frame = 0.0, ms_to_tol = 0.0;  // first incremental size
+  double ms_per_frame = 0.0, cpu_per_frame = 0.0, ms_budget = 0.0;  // first incremental size
   for (int n : inc_sizes) {
     const Row r = runIncremental(n, a);
     printRow("incr", r);
     ji += (ji.empty() ? "" : ",") + jsonRow(r, false);
     if (n == inc_sizes.front()) {
-      ms_per_frame = r.sgn_budget.ms;
-      cpu_per_frame = r.sgn_budget.cpu_ms;
-      ms_to_tol = r.sgn.ms;
+      ms_per_frame = r.sgn.ms;
+      cpu_per_frame = r.sgn.cpu_ms;
+      ms_budget = r.sgn_budget.ms;
     }
     std::fflush(stdout);
   }
-  // incremental_ms_per_frame: subspace GN with the per-frame budget (max 5 sweeps), wall clock.
+  // incremental_ms_per_frame: subspace GN run to the tolerance (max 20 sweeps), wall clock, on
+  // the 5k-point window; the 5-sweep budget is reported separately.
   std::printf("{\"batch\":[%s],\"incremental\":[%s],\"incremental_ms_per_frame\":%.3f,"
-              "\"incremental_cpu_ms_per_frame\":%.3f,\"incremental_ms_per_frame_to_tolerance\":%.3f}\n",
-              jb.c_str(), ji.c_str(), ms_per_frame, cpu_per_frame, ms_to_tol);
+              "\"incremental_cpu_ms_per_frame\":%.3f,\"incremental_ms_per_frame_max5_sweeps\":%.3f}\n",
+              jb.c_str(), ji.c_str(), ms_per_frame, cpu_per_frame, ms_budget);
   return 0;
 }
 
@@ -308,8 +317,11 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--free-cams") && i + 1 < argc) a.free_cams = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) a.frames = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--point-iterations") && i + 1 < argc) a.point_iterations = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--point-extrapolation") && i + 1 < argc) a.point_extrapolation = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--point-tolerance") && i + 1 < argc) a.point_tolerance = std::atof(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--quick] [--no-ceres] [--threads N] [--free-cams K] [--frames F] [--point-iterations P]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--quick] [--no-ceres] [--threads N] [--free-cams K] [--frames F] [--point-iterations P] "
+                   "[--point-extrapolation E] [--point-tolerance T]\n", argv[0]);
       return 2;
     }
   }
