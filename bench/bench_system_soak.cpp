@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
   double minutes = 60.0;
   int sample_every = 200;
   int width = 376, height = 240;
-  double archive_voxel = 0.01;
+  double archive_voxel = ve::map::MapConfig{}.archive_voxel_m;  // the shipped default
   long long max_frames = 0;
   std::uint64_t seed = 0;
   for (int i = 1; i < argc; ++i) {
@@ -124,8 +124,9 @@ int main(int argc, char** argv) {
   config.map.archive_voxel_m = archive_voxel;
   ve::pipeline::System system(config, camera);
 
-  std::printf("# soak: %dx%d, %.0f Hz, lap %.1f s, %.1f wall minutes, sample every %d frames, archive voxel %.3f\n",
-              width, height, seq.rate_hz, lap_s, minutes, sample_every, archive_voxel);
+  std::printf("# soak: %dx%d, %.0f Hz, lap %.1f s, %.1f wall minutes, sample every %d frames, archive voxel %.3f, "
+              "archive cap %zu points\n",
+              width, height, seq.rate_hz, lap_s, minutes, sample_every, archive_voxel, config.map.max_archive_points);
   std::printf("# scene built in %.1f s; RSS at start %.1f MB\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t_scene).count(), rssMb());
   std::printf("%8s %9s %9s %9s %10s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts",

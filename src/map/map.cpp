@@ -10,9 +10,24 @@ void MapConfig::validate() const {
   if (max_keyframes < 2) throw std::invalid_argument("map.max_keyframes must be >= 2");
   if (!(archive_voxel_m >= 0.0)) throw std::invalid_argument("map.archive_voxel_m must be >= 0");
   if (min_observations_to_archive < 1) throw std::invalid_argument("map.min_observations_to_archive must be >= 1");
+  if (max_archive_points < 2) throw std::invalid_argument("map.max_archive_points must be >= 2");
 }
 
-Map::Map(const MapConfig& config) : config_(config) { config_.validate(); }
+namespace {
+// Voxel index of p packed into 64 bits (21 bits per axis, clamped far out).
+std::uint64_t voxelKey(const Eigen::Vector3d& p, double voxel) {
+  constexpr std::int64_t kHalf = 1 << 20;
+  std::uint64_t key = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double i = std::floor(p[k] / voxel);
+    const std::int64_t c = static_cast<std::int64_t>(std::clamp(i, double(-kHalf), double(kHalf - 1))) + kHalf;
+    key = (key << 21) | static_cast<std::uint64_t>(c);
+  }
+  return key;
+}
+}  // namespace
+
+Map::Map(const MapConfig& config) : config_(config), archive_voxel_(config.archive_voxel_m) { config_.validate(); }
 
 void Map::clear() {
   orphans_.clear();
@@ -101,17 +116,33 @@ void Map::retireKeyframe(const Keyframe& retired) {
 void Map::archive(const Landmark& l) {
   if (l.num_observations < config_.min_observations_to_archive) return;
   if (!l.p_w.allFinite()) return;
-  if (archive_.size() >= config_.max_archive_points) return;
-  if (config_.archive_voxel_m > 0.0) {
-    const double s = 1.0 / config_.archive_voxel_m;
-    const std::int64_t ix = static_cast<std::int64_t>(std::floor(l.p_w.x() * s));
-    const std::int64_t iy = static_cast<std::int64_t>(std::floor(l.p_w.y() * s));
-    const std::int64_t iz = static_cast<std::int64_t>(std::floor(l.p_w.z() * s));
-    const std::int64_t key = (ix * 73856093) ^ (iy * 19349663) ^ (iz * 83492791);
-    if (archive_voxels_.count(key)) return;
-    archive_voxels_[key] = archive_.size();
-  }
+  if (archive_voxel_ > 0.0 && !archive_voxels_.insert(voxelKey(l.p_w, archive_voxel_)).second) return;
   archive_.push_back({l.p_w, l.intensity});
+  if (archive_.size() >= config_.max_archive_points) coarsenArchive();
+}
+
+void Map::coarsenArchive() {
+  if (archive_voxel_ <= 0.0) {
+    Eigen::Vector3d lo = archive_.front().p_w, hi = lo;
+    for (const ArchivedPoint& a : archive_) {
+      lo = lo.cwiseMin(a.p_w);
+      hi = hi.cwiseMax(a.p_w);
+    }
+    archive_voxel_ = std::max((hi - lo).norm() / 2048.0, 1e-9);
+  }
+  // Keep the first point of each voxel; double the voxel until at most half the
+  // cap remain, so the next thinning is far off.
+  std::vector<ArchivedPoint> kept;
+  while (true) {
+    archive_voxels_.clear();
+    kept.clear();
+    for (const ArchivedPoint& a : archive_) {
+      if (archive_voxels_.insert(voxelKey(a.p_w, archive_voxel_)).second) kept.push_back(a);
+    }
+    if (kept.size() <= config_.max_archive_points / 2) break;
+    archive_voxel_ *= 2.0;
+  }
+  archive_.swap(kept);
 }
 
 std::vector<ArchivedPoint> Map::allPoints() const {

@@ -72,10 +72,42 @@ TEST(Map, LandmarkStillTrackedIsRetiredOnceNoLongerSeen) {
   EXPECT_EQ(map.archive().size(), 1u);
 }
 
+TEST(Map, ArchiveStaysUnderItsCapAndKeepsEveryPlaceExplored) {
+  MapConfig cfg;
+  cfg.max_keyframes = 2;
+  cfg.min_observations_to_archive = 1;
+  cfg.max_archive_points = 1000;
+  Map map(cfg);
+  // A camera sweeping along x over 2,000 keyframes, each retiring 50 points
+  // spread over a 1 x 1 patch of a wall at x = k / 10: 100,000 points in all.
+  std::uint64_t id = 0;
+  for (std::uint64_t k = 0; k < 2000; ++k) {
+    for (int i = 0; i < 50; ++i, ++id) {
+      const double u = double((id * 7919) % 1000) / 1000.0, v = double((id * 104729) % 997) / 997.0;
+      map.addLandmark(id, Eigen::Vector3d(0.1 * double(k) + u, v, 3.0), 1).last_seen_frame = k;
+    }
+    map.addKeyframe(keyframeSeeing(k, id - 50, 50));
+    ASSERT_LE(map.archive().size(), 1000u) << "keyframe " << k;
+  }
+  EXPECT_GT(map.archiveVoxel(), 0.0);
+  EXPECT_GT(map.archive().size(), 200u);  // thinned to half the cap at most, then refilled
+  // The first and the last stretch of the wall both keep points.
+  int first = 0, last = 0;
+  for (const auto& a : map.archive()) {
+    first += a.p_w.x() < 1.0;
+    last += a.p_w.x() > 198.0;
+  }
+  EXPECT_GT(first, 0);
+  EXPECT_GT(last, 0);
+}
+
 TEST(Map, RejectsBadConfig) {
   MapConfig cfg;
   cfg.max_keyframes = 1;
   EXPECT_THROW(Map{cfg}, std::invalid_argument);
+  MapConfig cap;
+  cap.max_archive_points = 1;
+  EXPECT_THROW(Map{cap}, std::invalid_argument);
 }
 
 int main(int argc, char** argv) {

@@ -3,11 +3,14 @@
 // observes them) and keyframes (poses with the normalized observations of the
 // tracks they saw). Bounded: keyframes beyond the window are retired and
 // landmarks no longer observed are moved to a voxel-thinned archive kept for
-// export, so memory stays flat on long runs.
+// export. The archive is capped: when it fills up, its voxel doubles and it is
+// thinned again, so memory stays bounded on long runs while every explored
+// place keeps points (at a coarser spacing).
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <deque>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace vitamin_e::map {
@@ -43,8 +46,11 @@ struct ArchivedPoint {
 
 struct MapConfig {
   int max_keyframes = 8;          // keyframes kept in the active window
-  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (scaled map units)
-  std::size_t max_archive_points = 2000000;  // hard cap on archived points
+  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
+  // Cap on archived points (~70 B each with the voxel index). Reaching it
+  // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
+  // re-thins the archive to at most half the cap.
+  std::size_t max_archive_points = 300000;
   int min_observations_to_archive = 3;
   void validate() const;          // throws std::invalid_argument
 };
@@ -73,19 +79,22 @@ class Map {
   std::deque<Keyframe>& keyframes() { return keyframes_; }
 
   const std::vector<ArchivedPoint>& archive() const { return archive_; }
+  double archiveVoxel() const { return archive_voxel_; }  // current thinning voxel (0: none yet)
   // Active landmarks followed by archived points.
   std::vector<ArchivedPoint> allPoints() const;
 
  private:
   void retireKeyframe(const Keyframe& keyframe);
   void archive(const Landmark& landmark);
+  void coarsenArchive();
 
   MapConfig config_;
   std::unordered_map<std::uint64_t, Landmark> landmarks_;
   std::deque<Keyframe> keyframes_;
   std::vector<std::uint64_t> orphans_;  // landmarks without keyframe observations, still tracked
   std::vector<ArchivedPoint> archive_;
-  std::unordered_map<std::int64_t, std::size_t> archive_voxels_;
+  double archive_voxel_ = 0.0;
+  std::unordered_set<std::uint64_t> archive_voxels_;  // occupied voxels at archive_voxel_
 };
 
 }  // namespace vitamin_e::map
