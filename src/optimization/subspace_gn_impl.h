@@ -86,7 +86,7 @@ class SubspaceGn {
   std::vector<Matrix6d> Hcc_;
   BlockMatrix6 S_;
   std::vector<Vector6d> gc_, b_, dc_;
-  std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, Rt_, R_;
+  std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, R_;
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
   std::vector<Matrix63d> Hcp_, Y_;
   std::vector<Eigen::Isometry3d> saved_cams_;

@@ -92,14 +92,64 @@ void SubspaceGn::buildStructure() {
 
 namespace {
 
-// H += w J^T J on the upper triangle only (H is symmetrized by the caller).
-template <int N>
-inline void addUpperJtJ(const Eigen::Matrix<double, 2, N>& J, double w, Eigen::Matrix<double, N, N>* H) {
-  for (int c = 0; c < N; ++c) {
-    const double a0 = w * J(0, c), a1 = w * J(1, c);
-    for (int r = 0; r <= c; ++r) (*H)(r, c) += a0 * J(0, r) + a1 * J(1, r);
+// One observation of a point at p_w in a camera (R = R_w_c column-major, t = t_w_c), written
+// out in scalars: p_c = R^T (p_w - t), the residual r = uv - pi(p_c) and, from the sparsity
+// of the pinhole Jacobian [A 0 B; 0 C D], the rows of d r / d p_w (jp0, jp1) and of
+// d r / d camera (jc0, jc1, right-perturbation). Same formulas as reprojectionJacobians.
+struct ObsEval {
+  double x, y, z, r0, r1, sq;
+  double A, B, C, D;
+  double jp0[3], jp1[3];
+
+  // Returns false when the point is at depth <= min_depth (no residual).
+  inline bool residual(const geometry::Pinhole& K, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                       const Eigen::Vector3d& p, const Eigen::Vector2d& uv) {
+    const double* m = R.data();
+    const double d0 = p.x() - t.x(), d1 = p.y() - t.y(), d2 = p.z() - t.z();
+    x = m[0] * d0 + m[1] * d1 + m[2] * d2;
+    y = m[3] * d0 + m[4] * d1 + m[5] * d2;
+    z = m[6] * d0 + m[7] * d1 + m[8] * d2;
+    if (z <= kMinDepth) return false;
+    const double iz = 1.0 / z;
+    A = K.fx * iz;
+    C = K.fy * iz;
+    r0 = uv.x() - (A * x + K.cx);
+    r1 = uv.y() - (C * y + K.cy);
+    sq = r0 * r0 + r1 * r1;
+    B = -A * x * iz;
+    D = -C * y * iz;
+    return true;
   }
-}
+  inline void pointJacobian(const Eigen::Matrix3d& R) {
+    const double* m = R.data();
+    for (int k = 0; k < 3; ++k) {
+      jp0[k] = -(A * m[k] + B * m[6 + k]);
+      jp1[k] = -(C * m[3 + k] + D * m[6 + k]);
+    }
+  }
+  // H += w Jp^T Jp (upper triangle), g += w Jp^T r.
+  inline void addPoint(double w, Eigen::Matrix3d* H, Eigen::Vector3d* g) const {
+    const double wr0 = w * r0, wr1 = w * r1;
+    for (int l = 0; l < 3; ++l) {
+      const double a0 = w * jp0[l], a1 = w * jp1[l];
+      for (int k = 0; k <= l; ++k) (*H)(k, l) += a0 * jp0[k] + a1 * jp1[k];
+      (*g)(l) += jp0[l] * wr0 + jp1[l] * wr1;
+    }
+  }
+  // Camera rows: Hcc += w Jc^T Jc (upper triangle), gc += w Jc^T r, Hcp = w Jc^T Jp.
+  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* gc, Matrix63d* Hcp) const {
+    const double jc0[6] = {A, 0.0, B, B * y, A * z - B * x, -A * y};
+    const double jc1[6] = {0.0, C, D, D * y - C * z, -D * x, C * x};
+    const double wr0 = w * r0, wr1 = w * r1;
+    for (int l = 0; l < 6; ++l) {
+      const double a0 = w * jc0[l], a1 = w * jc1[l];
+      for (int k = 0; k <= l; ++k) (*Hcc)(k, l) += a0 * jc0[k] + a1 * jc1[k];
+      (*gc)(l) += jc0[l] * wr0 + jc1[l] * wr1;
+      if (Hcp)
+        for (int m = 0; m < 3; ++m) (*Hcp)(l, m) = a0 * jp0[m] + a1 * jp1[m];
+    }
+  }
+};
 
 template <int N>
 inline void mirrorUpper(Eigen::Matrix<double, N, N>* H) {
@@ -131,30 +181,20 @@ double SubspaceGn::linearize() {
       const Eigen::Vector3d p = P_.points[pts_[j]].p_w;
       for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
         const int c = obs_cam_[a];
-        const Eigen::Vector3d p_c = Rt_[c] * (p - t_[c]);
         const int s = obs_slot_[a];
-        if (p_c.z() <= kMinDepth) {
+        ObsEval e;
+        if (!e.residual(K_, R_[c], t_[c], p, obs_uv_[a])) {
           cost += kernel_.sigma2;
           if (s >= 0) Hcp_[s].setZero();
           continue;
         }
-        const Eigen::Vector2d r = obs_uv_[a] - K_.project(p_c);
-        const double sq = r.squaredNorm();
-        cost += kernel_.rho(sq);
-        const double w = kernel_.weight(sq);
-        const geometry::Matrix23d Jproj = K_.jacobian(p_c);
-        const geometry::Matrix23d Jp = -Jproj * Rt_[c];
-        addUpperJtJ<3>(Jp, w, &H);
-        const Eigen::Vector2d wr = w * r;
-        g.noalias() += Jp.transpose() * wr;
+        cost += kernel_.rho(e.sq);
+        const double w = kernel_.weight(e.sq);
+        e.pointJacobian(R_[c]);
+        e.addPoint(w, &H, &g);
         if (s >= 0) {
-          geometry::Matrix26d Jc;
-          Jc.leftCols<3>() = Jproj;
-          Jc.rightCols<3>().noalias() = -Jproj * geometry::skew(p_c);
           const int ci = slot_cam_[s];
-          addUpperJtJ<6>(Jc, w, &Hcc[ci]);
-          gc[ci].noalias() += Jc.transpose() * wr;
-          Hcp_[s].noalias() = Jc.transpose() * (w * Jp);
+          e.addCamera(w, &Hcc[ci], &gc[ci], &Hcp_[s]);
         }
       }
       mirrorUpper<3>(&H);
@@ -177,19 +217,13 @@ double SubspaceGn::linearize() {
   for (int k : cam_only_obs_) {
     const BaObservation& o = P_.observations[k];
     const int ci = cam_var_[o.camera];
-    const Eigen::Vector3d p_c = Rt_[o.camera] * (P_.points[o.point].p_w - t_[o.camera]);
-    if (p_c.z() <= kMinDepth) {
+    ObsEval e;
+    if (!e.residual(K_, R_[o.camera], t_[o.camera], P_.points[o.point].p_w, o.uv)) {
       cost += kernel_.sigma2;
       continue;
     }
-    const Eigen::Vector2d r = o.uv - K_.project(p_c);
-    const double sq = r.squaredNorm();
-    cost += kernel_.rho(sq);
-    const double w = kernel_.weight(sq);
-    geometry::Matrix26d Jc;
-    geometry::reprojectionJacobians(K_, p_c, R_[o.camera], &Jc, nullptr);
-    addUpperJtJ<6>(Jc, w, &Hcc_[ci]);
-    gc_[ci].noalias() += Jc.transpose() * (w * r);
+    cost += kernel_.rho(e.sq);
+    e.addCamera(kernel_.weight(e.sq), &Hcc_[ci], &gc_[ci], nullptr);
   }
   for (int i = 0; i < ncf; ++i) mirrorUpper<6>(&Hcc_[i]);
   return cost;
@@ -207,19 +241,15 @@ double SubspaceGn::refinePoints(int iterations) {
         if (H) H->setZero(), g->setZero();
         for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
           const int cam = obs_cam_[a];
-          const Eigen::Vector3d p_c = Rt_[cam] * (x - t_[cam]);
-          if (p_c.z() <= kMinDepth) {
+          ObsEval e;
+          if (!e.residual(K_, R_[cam], t_[cam], x, obs_uv_[a])) {
             c += kernel_.sigma2;
             continue;
           }
-          const Eigen::Vector2d r = obs_uv_[a] - K_.project(p_c);
-          const double sq = r.squaredNorm();
-          c += kernel_.rho(sq);
+          c += kernel_.rho(e.sq);
           if (!H) continue;
-          const geometry::Matrix23d Jp = -K_.jacobian(p_c) * Rt_[cam];
-          const double w = kernel_.weight(sq);
-          addUpperJtJ<3>(Jp, w, H);
-          g->noalias() += Jp.transpose() * (w * r);
+          e.pointJacobian(R_[cam]);
+          e.addPoint(kernel_.weight(e.sq), H, g);
         }
         if (H) mirrorUpper<3>(H);
         return c;
@@ -267,12 +297,10 @@ double SubspaceGn::refinePoints(int iterations) {
 
 void SubspaceGn::cacheCameras() {
   const size_t nc = P_.cameras.size();
-  Rt_.resize(nc);
   R_.resize(nc);
   t_.resize(nc);
   for (size_t c = 0; c < nc; ++c) {
     R_[c] = P_.cameras[c].T_w_c.linear();
-    Rt_[c] = R_[c].transpose();
     t_[c] = P_.cameras[c].T_w_c.translation();
   }
 }
@@ -302,9 +330,8 @@ double SubspaceGn::activeCost() {
   const int T = std::max(1, O_.threads);
   std::vector<double> cost_t(T, 0.0);
   auto term = [&](int cam, const Eigen::Vector3d& p_w, const Eigen::Vector2d& uv) {
-    const Eigen::Vector3d p_c = Rt_[cam] * (p_w - t_[cam]);
-    if (p_c.z() <= kMinDepth) return kernel_.sigma2;
-    return kernel_.rho((uv - K_.project(p_c)).squaredNorm());
+    ObsEval e;
+    return e.residual(K_, R_[cam], t_[cam], p_w, uv) ? kernel_.rho(e.sq) : kernel_.sigma2;
   };
   parallelFor(freePoints(), T, [&](int begin, int end, int t) {
     double c = 0.0;
