@@ -205,6 +205,23 @@ Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, f
   return Eigen::Vector2f(x + ox, y + oy);
 }
 
+float peakSharpness(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign) {
+  const int x = p.x(), y = p.y();
+  if (x < 1 || y < 1 || x >= kappa.cols - 1 || y >= kappa.rows - 1) return 0.f;
+  const float* rm = kappa.ptr<float>(y - 1);
+  const float* r0 = kappa.ptr<float>(y);
+  const float* rp = kappa.ptr<float>(y + 1);
+  const float c = sign * r0[x];
+  if (!(c > 0.f)) return 0.f;
+  const float hxx = sign * (r0[x - 1] + r0[x + 1]) - 2.f * c;
+  const float hyy = sign * (rm[x] + rp[x]) - 2.f * c;
+  const float hxy = 0.25f * sign * (rp[x + 1] - rp[x - 1] - rm[x + 1] + rm[x - 1]);
+  // Larger eigenvalue of [hxx hxy; hxy hyy]: the flattest direction.
+  const float half_tr = 0.5f * (hxx + hyy);
+  const float disc = std::sqrt(0.25f * (hxx - hyy) * (hxx - hyy) + hxy * hxy);
+  return -(half_tr + disc) / c;
+}
+
 float sampleBilinear(const cv::Mat& img, float x, float y) {
   x = std::clamp(x, 0.f, static_cast<float>(img.cols - 1));
   y = std::clamp(y, 0.f, static_cast<float>(img.rows - 1));

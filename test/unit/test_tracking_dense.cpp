@@ -9,11 +9,13 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "vitamin_e/tracking/affine_flow.h"
 #include "vitamin_e/tracking/brief.h"
 #include "vitamin_e/tracking/curvature.h"
 #include "vitamin_e/tracking/dense_tracker.h"
+#include "vitamin_e/tracking/patch_align.h"
 
 namespace vt = vitamin_e::tracking;
 
@@ -207,6 +209,75 @@ TEST(DenseTracker, TracksWarpedPatternEndToEnd) {
   tracker.dropTracks(drop);
   const auto f2 = tracker.track(renderBlobs(blobs, w, h, R, tt), 0.1);
   for (const auto& p : f2.points) EXPECT_TRUE(p.id != drop[0] && p.id != drop[1]);
+}
+
+// peakSharpness = -(flatter Hessian eigenvalue) / peak. For a round Gaussian
+// peak of scale s the discrete value is 2(1 - exp(-1/(2 s^2))) ~ 1/s^2; a ridge
+// (flat along y) scores 0 and a saddle scores < 0, whatever the sign convention.
+TEST(Curvature, PeakSharpnessSeparatesPeaksFromRidgesAndSaddles) {
+  const int n = 21, c = 10;
+  const double s = 2.0;
+  cv::Mat round(n, n, CV_32F), ridge(n, n, CV_32F), saddle(n, n, CV_32F), elong(n, n, CV_32F);
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) {
+      const double dx = x - c, dy = y - c;
+      round.at<float>(y, x) = static_cast<float>(-50.0 * std::exp(-(dx * dx + dy * dy) / (2 * s * s)));
+      ridge.at<float>(y, x) = static_cast<float>(50.0 * std::exp(-dx * dx / (2 * s * s)));
+      saddle.at<float>(y, x) = static_cast<float>(50.0 + dy * dy - dx * dx);
+      elong.at<float>(y, x) = static_cast<float>(50.0 * std::exp(-dx * dx / (2 * s * s) - dy * dy / (2 * 16 * s * s)));
+    }
+  }
+  const Eigen::Vector2i p(c, c);
+  const double expect = 2.0 * (1.0 - std::exp(-1.0 / (2 * s * s)));
+  EXPECT_NEAR(vt::peakSharpness(round, p, -1.f), expect, 1e-3);   // a minimum of kappa climbed as -kappa
+  EXPECT_EQ(vt::peakSharpness(round, p, 1.f), 0.f);                // wrong sign: not a peak
+  EXPECT_NEAR(vt::peakSharpness(ridge, p, 1.f), 0.0, 1e-6);
+  EXPECT_LT(vt::peakSharpness(saddle, p, 1.f), 0.f);
+  const float e = vt::peakSharpness(elong, p, 1.f);                 // 4x longer along y: 16x flatter
+  EXPECT_GT(e, 0.f);
+  EXPECT_LT(e, 0.1 * expect);
+  EXPECT_EQ(vt::peakSharpness(round, Eigen::Vector2i(0, 5), -1.f), 0.f);  // border
+}
+
+// The patch alignment recovers a sub-pixel translation to a few hundredths of
+// a pixel, also under a brightness offset; flat patches and patches leaving
+// the image fail.
+TEST(PatchAlign, RecoversSubpixelTranslationUnderBrightnessOffset) {
+  const int w = 160, h = 120;
+  const auto blobs = randomBlobs(300, w, h, 21);
+  const Eigen::Vector2d t(0.37, -0.61);
+  auto smooth = [](const cv::Mat& g, double offset) {
+    cv::Mat f;
+    g.convertTo(f, CV_32F, 1.0, offset);
+    cv::GaussianBlur(f, f, cv::Size(11, 11), 2.0, 2.0, cv::BORDER_REFLECT101);
+    return f;
+  };
+  const cv::Mat a = smooth(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 0.0);
+  const cv::Mat b = smooth(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 20.0);
+  vt::PatchAlignParams params;
+  params.radius = 3;
+  params.iterations = 4;
+  std::vector<double> err;
+  for (int y = 20; y < h - 20; y += 9) {
+    for (int x = 20; x < w - 20; x += 9) {
+      const Eigen::Vector2f p0(x + 0.2f, y - 0.3f);
+      Eigen::Vector2f p = p0;  // start at the old position: 0.7 px off
+      if (!vt::alignPatch(a, b, p0, params, &p)) continue;
+      err.push_back((p.cast<double>() - (p0.cast<double>() + t)).norm());
+    }
+  }
+  ASSERT_GT(err.size(), 100u);
+  std::sort(err.begin(), err.end());
+  EXPECT_LT(err[err.size() / 2], 0.03);
+  EXPECT_LT(err[err.size() * 9 / 10], 0.1);
+  // No texture: singular normal matrix.
+  const cv::Mat flat(h, w, CV_32F, cv::Scalar(100.f));
+  Eigen::Vector2f q(50.f, 50.f);
+  EXPECT_FALSE(vt::alignPatch(flat, flat, q, params, &q));
+  EXPECT_EQ(q, Eigen::Vector2f(50.f, 50.f));
+  // Leaving the image.
+  Eigen::Vector2f r(2.f, 50.f);
+  EXPECT_FALSE(vt::alignPatch(a, b, r, params, &r));
 }
 
 TEST(Brief, DistanceUnchangedByBrightnessOffset) {

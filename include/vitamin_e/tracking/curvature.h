@@ -51,6 +51,14 @@ bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const Cl
 // sign*kappa over the 3x3 neighbourhood; the offset is clamped to +-0.5 px.
 Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign);
 
+// How well the extremum at integer p is localized: the flatter principal
+// curvature of sign*kappa (the larger eigenvalue of its 3x3 Hessian, negated)
+// over the peak value sign*kappa(p), in 1/px^2. A round, sharp peak scores high;
+// a ridge (edge-like), a saddle or a plateau scores <= 0 or near 0, and its
+// position slides along the flat direction under noise. 0 at the image border
+// or when sign*kappa(p) <= 0.
+float peakSharpness(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign);
+
 // Bilinear sample of a CV_32FC1 image (clamped at the border).
 float sampleBilinear(const cv::Mat& img, float x, float y);
 
