@@ -22,6 +22,7 @@
 // pinhole pixel; estimated depths are scaled by s. The 2.5 cm volume integrates
 // depths <= --max-depth-2p5 (metres) and completeness is measured on surface
 // points seen within that range from the ground-truth poses of the used frames.
+// --max-frames N limits the input to N meshed frames (SLAM: the first N * step images).
 // Prints per-stage timings and, as the last line, a JSON summary.
 #include <cstdio>
 #include <ctime>
