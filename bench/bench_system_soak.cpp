@@ -4,7 +4,9 @@
 // resident memory (/proc/self/statm) every N frames, prints the curve and a
 // verdict: is memory flat after warm-up (slope over the second half)?
 //   bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]
-//                     [--archive-voxel V] [--max-frames F] [--seed S]
+//                     [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]
+// --realtime paces the frames at the camera rate (20 Hz), as a robot's camera
+// would: an hour of wall time is then an hour of sequence, at a fraction of a core.
 // Run by ./scripts/bench_soak.sh (not part of the tests). Last line: JSON.
 #include <unistd.h>
 
@@ -16,6 +18,7 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "vitamin_e/pipeline/system.h"
@@ -68,7 +71,7 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
 [[noreturn]] void usage(const std::string& msg) {
   std::cerr << "error: " << msg
             << "\nusage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]"
-               " [--archive-voxel V] [--max-frames F] [--seed S]\n";
+               " [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]\n";
   std::exit(2);
 }
 
@@ -81,8 +84,13 @@ int main(int argc, char** argv) {
   double archive_voxel = ve::map::MapConfig{}.archive_voxel_m;  // the shipped default
   long long max_frames = 0;
   std::uint64_t seed = 0;
+  bool realtime = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--realtime") {
+      realtime = true;
+      continue;
+    }
     if (i + 1 >= argc) usage(a + " needs a value");
     const std::string v = argv[++i];
     try {
@@ -124,9 +132,10 @@ int main(int argc, char** argv) {
   config.map.archive_voxel_m = archive_voxel;
   ve::pipeline::System system(config, camera);
 
-  std::printf("# soak: %dx%d, %.0f Hz, lap %.1f s, %.1f wall minutes, sample every %d frames, archive voxel %.3f, "
+  std::printf("# soak: %dx%d, %.0f Hz%s, lap %.1f s, %.1f wall minutes, sample every %d frames, archive voxel %.3f, "
               "archive cap %zu points\n",
-              width, height, seq.rate_hz, lap_s, minutes, sample_every, archive_voxel, config.map.max_archive_points);
+              width, height, seq.rate_hz, realtime ? " paced in real time" : "", lap_s, minutes, sample_every,
+              archive_voxel, config.map.max_archive_points);
   std::printf("# scene built in %.1f s; RSS at start %.1f MB\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t_scene).count(), rssMb());
   std::printf("%8s %9s %9s %9s %10s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts",
@@ -142,6 +151,7 @@ int main(int argc, char** argv) {
   std::uint64_t frame = 0;
   for (;; ++frame) {
     const double t = frame / seq.rate_hz;
+    if (realtime) std::this_thread::sleep_until(start + std::chrono::duration<double>(t));
     ve::synth::RenderOptions options;
     options.noise_sigma = seq.noise_sigma;
     options.noise_seed = seed * 1000003 + frame;

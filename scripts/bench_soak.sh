@@ -5,7 +5,8 @@
 # verdict on whether memory is flat after warm-up (slope of the second half).
 # Not part of the tests (it runs for an hour by default).
 #   ./scripts/bench_soak.sh [--minutes M] [--sample-every N] [--width W --height H]
-#                           [--archive-voxel V] [--max-frames F] [--seed S]
+#                           [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]
+# --realtime: frames paced at 20 Hz, as from a camera (an hour = 72,000 frames).
 # Last line of the output: JSON summary. Exit 1 if a non-finite pose was seen.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
