@@ -231,6 +231,10 @@ int main(int argc, char** argv) {
     else if (k == "--track-sigma") cfg.track_sigma_px = std::stod(argv[i + 1]);
     else if (k == "--min-track-curvature") cfg.min_track_curvature = std::stod(argv[i + 1]);
     else if (k == "--per-cell") cfg.max_per_cell = std::stoi(argv[i + 1]);
+    else if (k == "--track-sharpness") cfg.min_track_sharpness = std::stod(argv[i + 1]);
+    else if (k == "--extremum-weight") cfg.extremum_weight = std::stod(argv[i + 1]);
+    else if (k == "--align-radius") cfg.align_radius_px = std::stoi(argv[i + 1]);
+    else if (k == "--align-iterations") cfg.align_iterations = std::stoi(argv[i + 1]);
     else if (k == "--klt") run_klt = std::stoi(argv[i + 1]);
     else { std::fprintf(stderr, "unknown option %s\n", k.c_str()); return 2; }
   }

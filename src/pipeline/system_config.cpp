@@ -84,6 +84,10 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("tracker", "max_climb_steps", &t.max_climb_steps));
   f.push_back(field("tracker", "fb_threshold_px", &t.fb_threshold_px));
   f.push_back(field("tracker", "min_track_curvature", &t.min_track_curvature));
+  f.push_back(field("tracker", "noise_reference", &t.noise_reference));
+  f.push_back(field("tracker", "min_track_sharpness", &t.min_track_sharpness));
+  f.push_back(field("tracker", "extremum_weight", &t.extremum_weight));
+  f.push_back(field("tracker", "align_radius_px", &t.align_radius_px));
   f.push_back(field("tracker", "threads", &t.threads));
   // triangulation
   auto& tr = c.triangulation;

@@ -11,6 +11,7 @@
 #include "vitamin_e/tracking/affine_flow.h"
 #include "vitamin_e/tracking/brief.h"
 #include "vitamin_e/tracking/curvature.h"
+#include "vitamin_e/tracking/patch_align.h"
 #include "tracker_internal.h"
 
 namespace vitamin_e::tracking {
@@ -31,6 +32,7 @@ struct Track {
 // Result of tracking one point into the current frame.
 struct Step {
   Eigen::Vector2f uv;
+  Eigen::Vector2f ext;  // sub-pixel extremum (uv may be filtered)
   Eigen::Vector2i px;
   float kappa = 0.f;
   bool ok = false;
@@ -46,6 +48,7 @@ struct DenseTracker::Impl {
   bool has_prev = false;
   cv::Size size;
   cv::Mat prev_kappa, kappa;
+  cv::Mat prev_smooth, smooth;  // pre-smoothed float images (for the patch alignment)
   float prev_scale = 0.f;
   SmallFeatures prev_small, small;
   std::vector<Track> tracks, next_tracks;
@@ -61,6 +64,7 @@ struct DenseTracker::Impl {
 
   void trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale);
   int detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh);
+  void alignSteps();
 };
 
 void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale) {
@@ -76,6 +80,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
   const float inv_scale = 1.f / scale;
   const float max_ratio = static_cast<float>(cfg.max_curvature_ratio);
   const float blend = static_cast<float>(cfg.prediction_blend);
+  const float min_sharp = static_cast<float>(cfg.min_track_sharpness);
   steps.resize(tracks.size());
   auto work = [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
@@ -95,6 +100,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       if (t.sign * s.kappa < min_k) continue;
       const float strength = t.sign * s.kappa * inv_scale;
       if (strength > t.strength * max_ratio || strength * max_ratio < t.strength) continue;
+      if (min_sharp > 0.f && peakSharpness(kappa, s.px, t.sign) < min_sharp) continue;
       s.uv = refineSubpixel(kappa, s.px, t.sign);
       // Backward: climb the previous curvature from the inverse prediction.
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
@@ -106,7 +112,31 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       }
       const Eigen::Vector2f qs = refineSubpixel(prev_kappa, q, t.sign);
       s.ok = (qs - t.uv).squaredNorm() <= fb2;
+      s.ext = s.uv;
       if (s.ok && blend > 0.f && (pred - s.uv).squaredNorm() < 1.f) s.uv += blend * (pred - s.uv);
+    }
+  };
+  const int n = static_cast<int>(tracks.size());
+  const int stripes = cfg.threads > 1 && n > 256 ? cfg.threads * 4 : 1;
+  if (stripes == 1) {
+    work(0, n);
+  } else {
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
+      for (int s = r.start; s < r.end; ++s) work(n * s / stripes, n * (s + 1) / stripes);
+    }, stripes);
+  }
+}
+
+void DenseTracker::Impl::alignSteps() {
+  const float w = static_cast<float>(cfg.extremum_weight);
+  // The patch may move up to 1.5 px from the extremum; farther fails (the track is kept, unfiltered).
+  const PatchAlignParams ap{cfg.align_radius_px, cfg.align_iterations, 1.5f};
+  auto work = [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      Step& s = steps[i];
+      if (!s.ok) continue;
+      Eigen::Vector2f x = s.ext;
+      if (alignPatch(prev_smooth, smooth, tracks[i].uv, ap, &x)) s.uv = x + w * (s.ext - x);
     }
   };
   const int n = static_cast<int>(tracks.size());
@@ -187,6 +217,7 @@ void DenseTracker::reset() {
   impl_->has_prev = false;
   impl_->tracks.clear();
   impl_->prev_small = SmallFeatures{};
+  impl_->prev_smooth.release();
   impl_->sigma_state = 0.0;
 }
 
@@ -225,7 +256,8 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
     sigma = std::round(m.sigma_state * 4.0) / 4.0;
   }
   out.smoothing_sigma = sigma;
-  computeCurvature(gray, sigma, &m.kappa, cfg.threads);
+  const bool align = cfg.extremum_weight < 1.0;
+  computeCurvature(gray, sigma, &m.kappa, cfg.threads, align ? &m.smooth : nullptr);
   if (cfg.kappa_smoothing_sigma > 0.0) {
     const int k = 2 * static_cast<int>(std::ceil(2.5 * cfg.kappa_smoothing_sigma)) + 1;
     cv::GaussianBlur(m.kappa, m.kappa, cv::Size(k, k), cfg.kappa_smoothing_sigma, cfg.kappa_smoothing_sigma,
@@ -294,6 +326,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
         m.trackAll(A, b, scale);
       }
     }
+    if (align && !m.prev_smooth.empty() && m.prev_smooth.size() == m.smooth.size()) m.alignSteps();
     // Two tracks on one pixel: keep the older one.
     for (size_t i = 0; i < m.tracks.size(); ++i) {
       if (!m.steps[i].ok) continue;
@@ -360,6 +393,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
 
   std::swap(m.tracks, m.next_tracks);
   std::swap(m.prev_kappa, m.kappa);
+  std::swap(m.prev_smooth, m.smooth);
   std::swap(m.prev_small, m.small);
   m.prev_scale = scale;
   m.has_prev = true;

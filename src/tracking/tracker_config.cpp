@@ -51,6 +51,12 @@ void TrackerConfig::validate() const {
   require(std::isfinite(min_track_curvature) && min_track_curvature >= 0.0, "min_track_curvature",
           "must be finite and >= 0");
   require(std::isfinite(max_curvature_ratio) && max_curvature_ratio >= 1.0, "max_curvature_ratio", "must be >= 1");
+  require(std::isfinite(min_track_sharpness) && min_track_sharpness >= 0.0, "min_track_sharpness",
+          "must be finite and >= 0");
+  require(std::isfinite(extremum_weight) && extremum_weight > 0.0 && extremum_weight <= 1.0, "extremum_weight",
+          "must be in (0, 1]");
+  require(align_radius_px >= 1 && align_radius_px <= 4, "align_radius_px", "must be in [1, 4]");
+  require(align_iterations >= 1, "align_iterations", "must be >= 1");
   require(threads >= 1 && threads <= 64, "threads", "must be in [1, 64]");
 }
 

@@ -199,7 +199,9 @@ TEST(DenseTracker, TracksWarpedPatternEndToEnd) {
     ASSERT_TRUE(before.count(p.id));
     err.push_back((p.uv.cast<double>() - (R * before[p.id].cast<double>() + tt)).norm());
   }
-  ASSERT_GT(err.size(), 0.7 * f0.points.size());
+  // The sharpness check drops many of the ring-shaped extrema around isolated
+  // blobs (they slide along the ring): about two thirds survive here.
+  ASSERT_GT(err.size(), 0.6 * f0.points.size());
   EXPECT_EQ(f1.num_tracked, static_cast<int>(err.size()));
   std::sort(err.begin(), err.end());
   EXPECT_LT(err[err.size() / 2], 0.2);
@@ -280,6 +282,82 @@ TEST(PatchAlign, RecoversSubpixelTranslationUnderBrightnessOffset) {
   EXPECT_FALSE(vt::alignPatch(a, b, r, params, &r));
 }
 
+// min_track_sharpness ends the tracks whose kappa peak is flat in one
+// direction: more of them with a higher threshold, none with an absurd one.
+TEST(DenseTracker, SharpnessCheckEndsTracksOnFlatPeaks) {
+  const int w = 320, h = 240;
+  const auto blobs = randomBlobs(700, w, h, 19);
+  const cv::Mat i0 = renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero());
+  const cv::Mat i1 = renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d(1.7, 0.6));
+  auto tracked = [&](double sharpness) {
+    vt::TrackerConfig cfg;
+    cfg.brief_scale = 1.0 / 3.0;
+    cfg.brief_patch_size = 11;
+    cfg.min_track_sharpness = sharpness;
+    vt::DenseTracker tracker(cfg);
+    tracker.track(i0, 0.0);
+    return tracker.track(i1, 0.05).num_tracked;
+  };
+  const int n0 = tracked(0.0), n1 = tracked(0.05), n2 = tracked(0.2), n3 = tracked(100.0);
+  EXPECT_GT(n0, 300);
+  EXPECT_LT(n1, n0);
+  EXPECT_LT(n2, n1);
+  EXPECT_GT(n2, 0);
+  EXPECT_EQ(n3, 0);
+}
+
+// On noisy images the extremum position jitters from frame to frame; the patch
+// alignment carries the previous position over, and reporting the midpoint
+// (extremum_weight 0.5) must cut the steps off by > 1 px by at least half
+// (measured: 5.2 % of the tracks with the extremum alone, 1.4 % filtered) and
+// shorten the tail of the errors, without losing tracks. (The median is not
+// compared: here the flow prediction is exact, so prediction_blend, which the
+// filter replaces, is at its best.)
+TEST(DenseTracker, PatchFilterReducesJitterOnNoisyImages) {
+  const int w = 320, h = 240;
+  const auto blobs = randomBlobs(700, w, h, 17);
+  const Eigen::Vector2d t(2.3, -1.4);
+  auto noisy = [&](const cv::Mat& img, unsigned seed) {
+    cv::Mat f, noise(h, w, CV_32F);
+    cv::theRNG().state = seed;
+    cv::randn(noise, 0.0, 8.0);
+    img.convertTo(f, CV_32F);
+    f += noise;
+    f.convertTo(f, CV_8U);
+    return f;
+  };
+  const cv::Mat i0 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 1);
+  const cv::Mat i1 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 2);
+  auto run = [&](const vt::TrackerConfig& cfg, std::vector<double>* err) {
+    vt::DenseTracker tracker(cfg);
+    const auto f0 = tracker.track(i0, 0.0);
+    const auto f1 = tracker.track(i1, 0.05);
+    std::map<std::uint64_t, Eigen::Vector2f> before;
+    for (const auto& p : f0.points) before[p.id] = p.uv;
+    for (const auto& p : f1.points) {
+      if (p.age > 0) err->push_back((p.uv.cast<double>() - (before[p.id].cast<double>() + t)).norm());
+    }
+    std::sort(err->begin(), err->end());
+  };
+  vt::TrackerConfig on;
+  on.brief_scale = 1.0 / 3.0;
+  on.brief_patch_size = 11;
+  on.extremum_weight = 0.5;
+  vt::TrackerConfig off = on;
+  off.extremum_weight = 1.0;
+  std::vector<double> e_on, e_off;
+  run(on, &e_on);
+  run(off, &e_off);
+  ASSERT_GT(e_off.size(), 200u);
+  EXPECT_EQ(e_on.size(), e_off.size());
+  auto bad = [](const std::vector<double>& e) {
+    return static_cast<double>(std::count_if(e.begin(), e.end(), [](double x) { return x > 1.0; })) / e.size();
+  };
+  EXPECT_GT(bad(e_off), 0.02);
+  EXPECT_LT(bad(e_on), 0.5 * bad(e_off));
+  EXPECT_LT(e_on[e_on.size() * 95 / 100], e_off[e_off.size() * 95 / 100]);
+}
+
 TEST(Brief, DistanceUnchangedByBrightnessOffset) {
   const int w = 120, h = 100;
   const auto blobs = randomBlobs(400, w, h, 5);
@@ -354,6 +432,17 @@ TEST(TrackerConfig, ValidateNamesTheField) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("brief_scale"), std::string::npos);
   }
+  c = vt::TrackerConfig{};
+  c.extremum_weight = 0.0;
+  try {
+    c.validate();
+    FAIL() << "expected invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("extremum_weight"), std::string::npos);
+  }
+  c = vt::TrackerConfig{};
+  c.align_radius_px = 5;
+  EXPECT_THROW(c.validate(), std::invalid_argument);
   c = vt::TrackerConfig{};
   c.threads = 0;
   EXPECT_THROW(vt::DenseTracker{c}, std::invalid_argument);

@@ -7,7 +7,9 @@
 // kernel; (3) every live point is predicted with the flow and moved by hill
 // climbing F = s*kappa(x) + lambda * w(|x - x_bar|) (s = the point's curvature
 // sign, w = 1 - rho) to a local maximum, refined to sub-pixel precision and
-// checked forward-backward on the previous curvature image; (4) new extrema are
+// checked forward-backward on the previous curvature image; the reported
+// position is filtered with a patch alignment of the pre-smoothed images (see
+// extremum_weight); (4) new extrema are
 // spawned in grid cells that lost their points. Curvature is normalized by a
 // robust per-frame scale (median |kappa|) so that lambda and the thresholds mean
 // the same under exposure changes.
@@ -27,12 +29,12 @@ struct TrackerConfig {
   int max_points = 8000;            // upper bound on live points per frame (> 0)
   int grid_cell_px = 8;             // bucketing cell size [px]; new points go to under-filled cells
   int max_per_cell = 2;             // live points allowed per cell (>= 1)
-  int nms_radius_px = 2;            // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
+  int nms_radius_px = 1;            // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
   int border_px = 8;                // no point closer than this to the image border (>= 2)
   double smoothing_sigma = 2.0;     // Gaussian pre-smoothing before derivatives [px] (0 = none)
   bool adaptive_smoothing = true;   // raise the smoothing on noisy images (noise / median gradient above noise_reference)
   double max_smoothing_sigma = 3.0; // upper bound of the adaptive smoothing [px] (>= smoothing_sigma)
-  double noise_reference = 0.45;    // noise sigma / median |raw gradient| above which smoothing grows as sqrt(ratio/ref) (> 0)
+  double noise_reference = 0.5;     // noise sigma / median |raw gradient| above which smoothing grows as sqrt(ratio/ref) (> 0)
   double kappa_smoothing_sigma = 0.0;  // Gaussian smoothing of kappa itself before extrema/tracking [px] (0 = none)
   double min_curvature = 1.0;       // detection threshold on |kappa| / median|kappa| (>= 0)
   double min_abs_curvature = 0.5;   // absolute floor on |kappa| [DN^3/px^4]; flat/black images give nothing
@@ -50,11 +52,20 @@ struct TrackerConfig {
   double lambda = 8.0;              // weight of the prediction prior in F, in normalized-curvature units (>= 0)
   double track_sigma_px = 1.5;      // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
   int max_climb_steps = 12;         // hill-climbing steps (8-neighbour moves) before giving up (>= 1)
-  double prediction_blend = 0.3;    // [0, 1): move the sub-pixel extremum this far toward x_bar when within 1 px (temporal filter; 0 = pure extremum)
+  double prediction_blend = 0.3;    // [0, 1): move the sub-pixel extremum this far toward x_bar when within 1 px (temporal filter; 0 = pure extremum);
+                                    // replaced by the patch filter (extremum_weight < 1) where the patch alignment succeeds
   int polish_steps = 0;             // after maximizing F, climb kappa alone (no prior) up to this many steps; 0 = off (the prior helps on noisy images)
   double fb_threshold_px = 1.0;     // forward-backward check: max distance back to the old position [px] (> 0)
   double min_track_curvature = 0.5; // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
   double max_curvature_ratio = 1.5; // ... or when its normalized |kappa| changes by more than this factor (>= 1)
+  double min_track_sharpness = 0.05;// ... or when the peak it climbed to has peakSharpness() below this [1/px^2]:
+                                    // a ridge or plateau of kappa lets the position slide (0 = off)
+  double extremum_weight = 0.5;     // (0, 1]: reported position = x_p + w * (extremum - x_p), x_p = the previous
+                                    // position carried over by patch alignment on the smoothed images (a
+                                    // complementary filter: the extremum anchors against drift, the patch
+                                    // removes its frame-to-frame jitter); 1 = the extremum alone (off)
+  int align_radius_px = 3;          // patch of that alignment: (2r+1)^2 px, r in [1, 4]
+  int align_iterations = 2;         // its Gauss-Newton steps (>= 1)
   bool refine_flow = true;          // refit A, b to the tracked points (GM, down to 1 px) and track again from it
   bool predict_parallax = true;     // add each point's last residual to the dominant flow (x_bar = A x + b + r)
   // --- execution ---
