@@ -10,7 +10,7 @@
 # trajectory.txt and stats.json), then `./scripts/evaluate.sh` (Sim(3) ATE).
 # OUT defaults to out/suite. The table also goes to OUT/results.md.
 # Columns: success = tracked / all frames (the paper's); after init = tracked /
-# frames from the first localized one on; peak RSS of the whole run.
+# frames from the first initialization on; peak RSS of the whole run.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 

@@ -317,7 +317,8 @@ int run(const Options& o) {
   // Frames seen while initializing are localized once the map exists: the
   // system's count (= trajectory poses) is the number of tracked frames.
   stats.tracked_frames = system.framesTracked();
-  stats.first_localized_frame = system.firstLocalizedFrame();
+  stats.first_init_frame = system.firstInitFrame();
+  stats.tracked_since_init = system.framesTrackedSinceInit();
 
   std::string err;
   const std::vector<pl::MapPoint3> points = system.mapPoints();

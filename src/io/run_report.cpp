@@ -100,7 +100,8 @@ std::string toJson(const RunStats& s) {
   os << "  \"success_rate\": " << number(s.successRate()) << ",\n";
   os << "  \"skipped_frames\": " << s.skipped_frames << ",\n";
   os << "  \"init_retries\": " << s.init_retries << ",\n";
-  os << "  \"first_localized_frame\": " << s.first_localized_frame << ",\n";
+  os << "  \"first_init_frame\": " << s.first_init_frame << ",\n";
+  os << "  \"tracked_since_init\": " << s.tracked_since_init << ",\n";
   os << "  \"success_after_init\": " << number(s.successAfterInit()) << ",\n";
   os << "  \"interrupted\": " << (s.interrupted ? "true" : "false") << ",\n";
   os << "  \"map_points\": " << s.map_points << ",\n";

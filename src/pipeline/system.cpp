@@ -131,9 +131,8 @@ void System::Impl::recordPose(std::uint64_t index, double t, const std::string& 
   e.T_w_c = T_w_c;
   trajectory.push_back(e);
   ++frames_tracked;
-  if (first_localized_frame < 0 || static_cast<long long>(index) < first_localized_frame) {
-    first_localized_frame = static_cast<long long>(index);
-  }
+  if (first_init_frame < 0) ++localized_before_init;  // the reference and in-between frames of the first map
+  (void)index;
 }
 
 void System::Impl::fillResultPoints(FrameResult* result) const {
@@ -197,7 +196,10 @@ std::vector<MapPoint3> System::mapPoints() const {
 
 std::size_t System::framesProcessed() const { return impl_->frames_processed; }
 std::size_t System::framesTracked() const { return impl_->frames_tracked; }
-long long System::firstLocalizedFrame() const { return impl_->first_localized_frame; }
+long long System::firstInitFrame() const { return impl_->first_init_frame; }
+std::size_t System::framesTrackedSinceInit() const {
+  return impl_->first_init_frame < 0 ? 0 : impl_->frames_tracked - impl_->localized_before_init;
+}
 int System::initRetries() const { return impl_->init_retries; }
 const StageTimings& System::timings() const { return impl_->timings; }
 const SystemConfig& System::config() const { return impl_->config; }

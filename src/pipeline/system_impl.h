@@ -65,7 +65,8 @@ struct System::Impl {
   std::uint64_t frame_index = 0;  // index of the frame being mapped
   std::uint64_t frames_processed = 0;
   std::uint64_t frames_tracked = 0;
-  long long first_localized_frame = -1;  // earliest frame index with a recorded pose
+  long long first_init_frame = -1;        // frame index of the first successful initialization
+  std::uint64_t localized_before_init = 0; // poses recorded for frames before it
   int init_retries = 0;
   bool initialized_once = false;
   TrackingState state = TrackingState::kInitializing;

@@ -116,6 +116,7 @@ void System::Impl::initialize(FrameResult* result) {
   recordPose(ref_copy.frame_index, ref_copy.timestamp, ref_copy.timestamp_text, map.keyframes().front().T_w_c);
   localizePendingFrames();
   T_w_cur = map.keyframes().back().T_w_c;
+  if (first_init_frame < 0) first_init_frame = static_cast<long long>(frame_index);
   recordPose(frame_index, cur_t, cur_text, T_w_cur);
   // Motion model from the last localized in-between frame, if any.
   T_last_prev = Eigen::Isometry3d::Identity();

@@ -19,7 +19,8 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   s.addFrame(true, 300, 150, {{"tracking", 6.0}, {"ba", 20.0}}, 30.0);
   s.addFrame(true, 200, 120, {{"tracking", 5.0}, {"total", 999.0}}, 7.0);
   s.skipped_frames = 1;
-  s.first_localized_frame = 1;
+  s.first_init_frame = 1;
+  s.tracked_since_init = 1;
   s.map_points = 1234;
   s.peak_rss_mb = peakRssMb();
   EXPECT_GT(s.peak_rss_mb, 1.0);
@@ -33,8 +34,9 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   EXPECT_NEAR(j["success_rate"].as<double>(), 2.0 / 3.0, 1e-5);
   EXPECT_EQ(j["skipped_frames"].as<int>(), 1);
   EXPECT_EQ(j["init_retries"].as<int>(), 2);
-  EXPECT_EQ(j["first_localized_frame"].as<int>(), 1);
-  EXPECT_DOUBLE_EQ(j["success_after_init"].as<double>(), 1.0);  // 2 of the 2 frames from frame 1 on
+  EXPECT_EQ(j["first_init_frame"].as<int>(), 1);
+  EXPECT_EQ(j["tracked_since_init"].as<int>(), 1);
+  EXPECT_DOUBLE_EQ(j["success_after_init"].as<double>(), 0.5);  // 1 of the 2 frames from frame 1 on
   EXPECT_EQ(j["map_points"].as<int>(), 1234);
   EXPECT_FALSE(j["interrupted"].as<bool>());
   EXPECT_DOUBLE_EQ(j["points_per_frame"]["mean"].as<double>(), 200.0);
@@ -62,7 +64,7 @@ TEST(RunReport, EmptyRunIsStillValidJson) {
   const YAML::Node j = YAML::Load(toJson(s));
   EXPECT_EQ(j["frames"].as<int>(), 0);
   EXPECT_DOUBLE_EQ(j["success_rate"].as<double>(), 0.0);
-  EXPECT_EQ(j["first_localized_frame"].as<int>(), -1);
+  EXPECT_EQ(j["first_init_frame"].as<int>(), -1);
   EXPECT_DOUBLE_EQ(j["success_after_init"].as<double>(), 0.0);
   EXPECT_TRUE(j["interrupted"].as<bool>());
   EXPECT_TRUE(j["timing_ms"].IsMap());

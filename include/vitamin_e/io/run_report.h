@@ -17,7 +17,8 @@ struct RunStats {
   std::size_t tracked_frames = 0;
   std::size_t skipped_frames = 0;  // unreadable images (warned and skipped)
   int init_retries = 0;
-  long long first_localized_frame = -1;  // earliest frame with a pose (-1: none)
+  long long first_init_frame = -1;      // frame at which the first map was built (-1: never)
+  std::size_t tracked_since_init = 0;    // tracked frames from that frame on
   std::size_t map_points = 0;    // points written to points.ply
   bool interrupted = false;      // stopped by SIGINT/SIGTERM
   double wall_time_s = 0.0;
@@ -31,11 +32,11 @@ struct RunStats {
   void addFrame(bool tracked, std::size_t points, std::size_t mapped,
                 const std::vector<std::pair<std::string, double>>& stage_ms, double total_ms);
   double successRate() const { return frames ? static_cast<double>(tracked_frames) / frames : 0.0; }
-  // Tracked frames over the frames from the first localized one on: the share
-  // of frames kept once the map exists (0 when nothing was localized).
+  // Tracked frames over all frames from the first initialization on: the share
+  // of frames kept once the map exists (0 when it was never built).
   double successAfterInit() const {
-    if (first_localized_frame < 0 || static_cast<std::size_t>(first_localized_frame) >= frames) return 0.0;
-    return static_cast<double>(tracked_frames) / static_cast<double>(frames - first_localized_frame);
+    if (first_init_frame < 0 || static_cast<std::size_t>(first_init_frame) >= frames) return 0.0;
+    return static_cast<double>(tracked_since_init) / static_cast<double>(frames - first_init_frame);
   }
 };
 

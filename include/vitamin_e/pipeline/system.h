@@ -51,9 +51,12 @@ class System {
 
   std::size_t framesProcessed() const;
   std::size_t framesTracked() const;
-  // Index (0 = the first frame given to process()) of the earliest frame with a
-  // pose in the trajectory; -1 while there is none.
-  long long firstLocalizedFrame() const;
+  // Index (0 = the first frame given to process()) of the frame at which the
+  // first map was built; -1 while there is none.
+  long long firstInitFrame() const;
+  // Frames with a pose from that frame on (the reference and in-between frames
+  // localized at the initialization are not counted).
+  std::size_t framesTrackedSinceInit() const;
   int initRetries() const;
   const StageTimings& timings() const;
   const SystemConfig& config() const;
