@@ -45,6 +45,7 @@ struct Sample {
   double rss_mb = 0.0;
   std::size_t map_points = 0;
   std::size_t trajectory = 0;
+  double trajectory_mb = 0.0;  // the trajectory's buffer: capacity x entry (+ heap stamp strings)
   int init_retries = 0;
   double ms_per_frame = 0.0;  // mean since the previous sample
 };
@@ -170,7 +171,13 @@ int main(int argc, char** argv) {
       smp.seq_min = (frame + 1) / seq.rate_hz / 60.0;
       smp.rss_mb = rssMb();
       smp.map_points = system.mapPoints().size();
-      smp.trajectory = system.trajectory().size();
+      const auto& tr = system.trajectory();
+      smp.trajectory = tr.size();
+      double traj_bytes = static_cast<double>(tr.capacity()) * sizeof(ve::pipeline::TrajectoryEntry);
+      if (!tr.empty() && tr.back().timestamp_text.capacity() > 15) {  // beyond the small-string buffer
+        traj_bytes += static_cast<double>(tr.size()) * (tr.back().timestamp_text.capacity() + 17);
+      }
+      smp.trajectory_mb = traj_bytes / (1024.0 * 1024.0);
       smp.init_retries = system.initRetries();
       const std::uint64_t since = samples.empty() ? frame + 1 : frame + 1 - samples.back().frame;
       smp.ms_per_frame = std::chrono::duration<double, std::milli>(now - last_sample_time).count() / since;
@@ -191,19 +198,20 @@ int main(int argc, char** argv) {
   }
 
   // Verdict: slope of RSS over the second half of the samples (warm-up = first half),
-  // with the growth the design allows (one TrajectoryEntry per tracked frame,
-  // one archived point per new voxel) shown next to it.
-  std::vector<double> x, y, ym;
+  // with the growth the design allows shown next to it: the trajectory's buffer
+  // (one TrajectoryEntry per tracked frame; it grows by doubling, and glibc keeps
+  // the old buffer as free heap, so RSS steps with its capacity) and one archived
+  // point per new voxel.
+  std::vector<double> x, y, ym, yt;
   for (std::size_t i = samples.size() / 2; i < samples.size(); ++i) {
     x.push_back(samples[i].wall_min);
     y.push_back(samples[i].rss_mb);
     ym.push_back(static_cast<double>(samples[i].map_points));
+    yt.push_back(samples[i].trajectory_mb);
   }
   const double rss_slope = slope(x, y);              // MB per wall minute
   const double points_slope = slope(x, ym);          // map points per wall minute
-  const double frames_per_min = frames / std::max(1e-9, samples.back().wall_min);
-  const double traj_mb_per_min =
-      frames_per_min * sizeof(ve::pipeline::TrajectoryEntry) / (1024.0 * 1024.0);
+  const double traj_mb_per_min = slope(x, yt);
   const double points_mb_per_min = points_slope * 64.0 / (1024.0 * 1024.0);  // ~64 B per point (archive + voxel index)
   const double unexplained = rss_slope - traj_mb_per_min - std::max(0.0, points_mb_per_min);
   const double rss_end = samples.back().rss_mb;
