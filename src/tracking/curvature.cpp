@@ -7,26 +7,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "tracker_internal.h"
+
 namespace vitamin_e::tracking {
-namespace {
-
-// Runs body(row_begin, row_end) over [0, rows) in `stripes` chunks.
-template <class F>
-void forStripes(int rows, int stripes, const F& body) {
-  if (stripes <= 1 || rows < 64) {
-    body(0, rows);
-    return;
-  }
-  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
-    for (int s = r.start; s < r.end; ++s) {
-      const int r0 = static_cast<int>(static_cast<long>(rows) * s / stripes);
-      const int r1 = static_cast<int>(static_cast<long>(rows) * (s + 1) / stripes);
-      body(r0, r1);
-    }
-  }, stripes);
-}
-
-}  // namespace
 
 void computeCurvature(const cv::Mat& gray, double sigma, cv::Mat* kappa, int stripes, cv::Mat* smoothed) {
   if (gray.empty() || (gray.type() != CV_8UC1 && gray.type() != CV_32FC1)) {
@@ -41,7 +24,7 @@ void computeCurvature(const cv::Mat& gray, double sigma, cv::Mat* kappa, int str
   const int rows = f.rows, cols = f.cols;
   kappa->create(rows, cols, CV_32FC1);
   cv::Mat& K = *kappa;
-  forStripes(rows, stripes, [&](int r0, int r1) {
+  forStripes(rows, stripes, 64, [&](int r0, int r1) {
     for (int y = r0; y < r1; ++y) {
       float* out = K.ptr<float>(y);
       if (y == 0 || y == rows - 1 || cols < 3) {

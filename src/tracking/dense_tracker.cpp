@@ -116,15 +116,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       if (s.ok && blend > 0.f && (pred - s.uv).squaredNorm() < 1.f) s.uv += blend * (pred - s.uv);
     }
   };
-  const int n = static_cast<int>(tracks.size());
-  const int stripes = cfg.threads > 1 && n > 256 ? cfg.threads * 4 : 1;
-  if (stripes == 1) {
-    work(0, n);
-  } else {
-    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
-      for (int s = r.start; s < r.end; ++s) work(n * s / stripes, n * (s + 1) / stripes);
-    }, stripes);
-  }
+  forStripes(static_cast<int>(tracks.size()), cfg.threads > 1 ? cfg.threads * 4 : 1, 257, work);
 }
 
 void DenseTracker::Impl::alignSteps() {
@@ -139,15 +131,7 @@ void DenseTracker::Impl::alignSteps() {
       if (alignPatch(prev_smooth, smooth, tracks[i].uv, ap, &x)) s.uv = x + w * (s.ext - x);
     }
   };
-  const int n = static_cast<int>(tracks.size());
-  const int stripes = cfg.threads > 1 && n > 256 ? cfg.threads * 4 : 1;
-  if (stripes == 1) {
-    work(0, n);
-  } else {
-    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
-      for (int s = r.start; s < r.end; ++s) work(n * s / stripes, n * (s + 1) / stripes);
-    }, stripes);
-  }
+  forStripes(static_cast<int>(tracks.size()), cfg.threads > 1 ? cfg.threads * 4 : 1, 257, work);
 }
 
 int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh) {
