@@ -9,25 +9,14 @@
 
 #include <Eigen/Geometry>
 
+#include "mesh_checks.h"
 #include "vitamin_e/fusion/marching_cubes.h"
 
 using namespace vitamin_e;
 using fusion::TriangleMesh;
+using test::openEdges;
 
 namespace {
-
-// Number of undirected edges not shared by exactly two faces in opposite directions.
-int openEdges(const TriangleMesh& mesh) {
-  std::map<std::pair<int, int>, int> directed;
-  for (const auto& f : mesh.faces)
-    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
-  int bad = 0;
-  for (const auto& [e, c] : directed) {
-    const auto it = directed.find({e.second, e.first});
-    if (c != 1 || it == directed.end() || it->second != 1) ++bad;
-  }
-  return bad;
-}
 
 // Signed enclosed volume (divergence theorem): > 0 when the normals point out.
 double signedVolume(const TriangleMesh& mesh) {

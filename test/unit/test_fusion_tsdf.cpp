@@ -7,6 +7,7 @@
 #include <map>
 #include <random>
 
+#include "mesh_checks.h"
 #include "vitamin_e/fusion/tsdf_integrator.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
 #include "vitamin_e/meshing/frame_mesher.h"
@@ -94,15 +95,7 @@ meshing::FrameMesh planeMesh(const Isometry3d& T_w_c, const PinholeIntrinsics& K
 
 // Every undirected edge is shared by exactly two faces, in opposite directions.
 void expectClosed(const fusion::TriangleMesh& mesh) {
-  std::map<std::pair<int, int>, int> directed;
-  for (const auto& f : mesh.faces)
-    for (int k = 0; k < 3; ++k) ++directed[{f[k], f[(k + 1) % 3]}];
-  int bad = 0;
-  for (const auto& [e, c] : directed) {
-    const auto it = directed.find({e.second, e.first});
-    if (c != 1 || it == directed.end() || it->second != 1) ++bad;
-  }
-  EXPECT_EQ(bad, 0) << "of " << directed.size() << " directed edges";
+  EXPECT_EQ(test::openEdges(mesh), 0) << "of " << 3 * mesh.faces.size() << " directed edges";
 }
 
 }  // namespace
