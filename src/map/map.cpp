@@ -31,6 +31,7 @@ Map::Map(const MapConfig& config) : config_(config), archive_voxel_(config.archi
 
 void Map::clear() {
   orphans_.clear();
+  dormant_.clear();  // a new map has a new scale and frame: the old points do not fit it
   landmarks_.clear();
   keyframes_.clear();
 }
@@ -88,7 +89,7 @@ void Map::retireKeyframe(const Keyframe& retired) {
     auto it = landmarks_.find(id);
     if (it == landmarks_.end() || !it->second.observations.empty()) continue;
     if (it->second.last_seen_frame < oldest) {
-      archive(it->second);
+      retireLandmark(it->second);
       landmarks_.erase(it);
     } else {
       still_orphans.push_back(id);
@@ -105,12 +106,79 @@ void Map::retireKeyframe(const Keyframe& retired) {
             v.end());
     if (!v.empty()) continue;
     if (l.last_seen_frame < oldest) {
-      archive(l);
+      retireLandmark(l);
       landmarks_.erase(it);
     } else {
       orphans_.push_back(l.id);
     }
   }
+}
+
+void Map::retireLandmark(const Landmark& l) {
+  archive(l);
+  if (config_.max_dormant_landmarks == 0 || l.num_observations < config_.min_observations_to_archive ||
+      !l.p_w.allFinite()) {
+    return;
+  }
+  DormantLandmark d;
+  d.id = l.id;
+  d.p_w = l.p_w;
+  d.intensity = l.intensity;
+  d.polarity = l.polarity;
+  d.num_observations = l.num_observations;
+  dormant_.push_back(d);
+  while (dormant_.size() > config_.max_dormant_landmarks) dormant_.pop_front();
+}
+
+namespace {
+bool observedByBoth(const std::deque<Keyframe>& keyframes, std::uint64_t a, std::uint64_t b) {
+  for (const Keyframe& kf : keyframes) {
+    if (kf.observations.count(a) && kf.observations.count(b)) return true;
+  }
+  return false;
+}
+}  // namespace
+
+bool Map::relabelLandmark(std::uint64_t old_id, std::uint64_t new_id) {
+  auto it = landmarks_.find(old_id);
+  if (it == landmarks_.end() || old_id == new_id || landmarks_.count(new_id)) return false;
+  if (observedByBoth(keyframes_, old_id, new_id)) return false;
+  Landmark l = std::move(it->second);
+  landmarks_.erase(it);
+  l.id = new_id;
+  for (Keyframe& kf : keyframes_) {
+    auto o = kf.observations.find(old_id);
+    if (o != kf.observations.end()) {
+      kf.observations.emplace(new_id, o->second);
+      kf.observations.erase(o);
+    } else if ((o = kf.observations.find(new_id)) != kf.observations.end()) {
+      l.observations.push_back({kf.frame_index, o->second});
+      ++l.num_observations;
+    }
+  }
+  std::sort(l.observations.begin(), l.observations.end(),
+            [](const LandmarkObservation& a, const LandmarkObservation& b) { return a.keyframe < b.keyframe; });
+  for (std::uint64_t& id : orphans_) {
+    if (id == old_id) id = new_id;
+  }
+  if (l.observations.empty() && std::find(orphans_.begin(), orphans_.end(), new_id) == orphans_.end()) {
+    orphans_.push_back(new_id);
+  }
+  landmarks_.emplace(new_id, std::move(l));
+  return true;
+}
+
+bool Map::reviveDormant(std::size_t index, std::uint64_t track_id, std::uint64_t frame_index) {
+  if (index >= dormant_.size() || dormant_[index].revived || landmarks_.count(track_id)) return false;
+  DormantLandmark& d = dormant_[index];
+  Landmark& l = addLandmark(track_id, d.p_w, d.intensity);
+  l.polarity = d.polarity;
+  l.revived = true;
+  l.num_observations += d.num_observations;
+  l.last_seen_frame = frame_index;
+  if (l.observations.empty()) orphans_.push_back(track_id);
+  d.revived = true;
+  return true;
 }
 
 void Map::archive(const Landmark& l) {

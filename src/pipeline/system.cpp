@@ -76,6 +76,7 @@ TrackedFrame System::Impl::trackStage(const cv::Mat& image, double timestamp, co
     t.id = p.id;
     t.uv = p.uv;
     t.intensity = p.intensity;
+    t.polarity = p.curvature >= 0.f ? 1 : -1;
     if (!camera.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
     f.tracks.push_back(t);
   }

@@ -113,6 +113,7 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("map", "archive_voxel_m", &m.archive_voxel_m));
   f.push_back(field("map", "max_archive_points", &m.max_archive_points));
   f.push_back(field("map", "min_observations_to_archive", &m.min_observations_to_archive));
+  f.push_back(field("map", "max_dormant_landmarks", &m.max_dormant_landmarks));
   // dense reconstruction (map units)
   auto& d = c.dense;
   f.push_back(field("dense", "enabled", &c.dense_enabled));
@@ -148,6 +149,9 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("pipeline", "keyframe_parallax_px", &c.keyframe_parallax_px));
   f.push_back(field("pipeline", "keyframe_min_mapped_ratio", &c.keyframe_min_mapped_ratio));
   f.push_back(field("pipeline", "max_step_depth_ratio", &c.max_step_depth_ratio));
+  f.push_back(field("pipeline", "reuse_radius_px", &c.reuse_radius_px));
+  f.push_back(field("pipeline", "reuse_occlusion_ratio", &c.reuse_occlusion_ratio));
+  f.push_back(field("pipeline", "reuse_fix_revived", &c.reuse_fix_revived));
   // init (two-view); focal_px is taken from the camera
   auto& in = c.init;
   f.push_back(field("init", "ransac_threshold_px", &in.ransac_threshold_px));
@@ -268,6 +272,8 @@ void SystemConfig::validate() const {
   check(keyframe_min_mapped_ratio >= 0.0 && keyframe_min_mapped_ratio <= 1.0,
         "pipeline.keyframe_min_mapped_ratio must be in [0, 1]");
   check(max_step_depth_ratio > 0.0, "pipeline.max_step_depth_ratio must be > 0");
+  check(reuse_radius_px >= 0.0 && reuse_radius_px <= 20.0, "pipeline.reuse_radius_px must be in [0, 20]");
+  check(reuse_occlusion_ratio >= 1.0, "pipeline.reuse_occlusion_ratio must be >= 1");
 }
 
 std::string SystemConfig::describe() const {

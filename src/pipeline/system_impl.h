@@ -41,6 +41,7 @@ struct System::Impl {
   bool needKeyframe() const;
   void insertKeyframe();
   int triangulateNewPoints();
+  int reuseMapPoints();  // system_reuse.cpp
   void localizePendingFrames();
   void recordPose(std::uint64_t frame_index, double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
   void fillResultPoints(FrameResult* result) const;
@@ -88,6 +89,7 @@ struct System::Impl {
   // initialization
   std::deque<PendingFrame> pending;  // pending.front() is the reference frame
   std::uint64_t frames_since_keyframe = 0;
+  std::uint64_t reused_points = 0;  // map points taken over by new tracks (map reuse)
 
   std::vector<TrajectoryEntry> trajectory;
 };

@@ -90,13 +90,16 @@ void System::Impl::initialize(FrameResult* result) {
   kf1.frame_index = frame_index;
   kf1.timestamp = cur_t;
   kf1.T_w_c = T_w_c1;
-  std::unordered_map<std::uint64_t, std::uint8_t> intensity;
-  for (const FrameTrack& t : cur_tracks) intensity[t.id] = t.intensity;
+  std::unordered_map<std::uint64_t, const FrameTrack*> track_of;
+  for (const FrameTrack& t : cur_tracks) track_of[t.id] = &t;
   for (std::size_t i = 0; i < ids.size(); ++i) {
     kf0.observations.emplace(ids[i], xy0[i]);
     kf1.observations.emplace(ids[i], xy1[i]);
     if (i < tv.valid.size() && tv.valid[i]) {
-      map.addLandmark(ids[i], T_w_c0 * (scale * tv.points_c0[i]), intensity[ids[i]]);
+      auto t = track_of.find(ids[i]);
+      map::Landmark& l = map.addLandmark(ids[i], T_w_c0 * (scale * tv.points_c0[i]),
+                                         t == track_of.end() ? 0 : t->second->intensity);
+      l.polarity = t == track_of.end() ? 0 : t->second->polarity;
     }
   }
   // Tracks born after the reference: observed by the second keyframe only.

@@ -31,6 +31,11 @@ void System::Impl::track(FrameResult* result) {
             " map points of the previous frame are still tracked";
     }
     const bool ok = !vanished && estimatePose(&T_w_c, &why);
+    if (ok) {
+      // Localized: new tracks where old map points project take them over.
+      T_w_cur = T_w_c;
+      reuseMapPoints();
+    }
     const double ms = elapsedMs(t0);
     addTiming("pose", ms);
     result->timing_ms["pose"] = ms;
@@ -180,14 +185,21 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
   // Points: per frame, those the current frame sees; per keyframe, those the
   // free keyframes see. Each comes with all its keyframe observations.
   std::vector<map::Landmark*> points;
-  auto add_point = [&](map::Landmark* l) {
+  // A point seen by fewer than two cameras of the problem has no depth: fixed.
+  // So are revived points, if configured: they anchor the pose to the older map.
+  auto add_point = [&](map::Landmark* l, int extra_observations) {
     const int idx = static_cast<int>(problem.points.size());
     problem.points.push_back({l->p_w, false});
     points.push_back(l);
+    int seen = extra_observations;
     for (const map::LandmarkObservation& o : l->observations) {
       const int cam = camera_of(o.keyframe);
-      if (cam >= 0) problem.observations.push_back({cam, idx, to_px(o.xy)});
+      if (cam >= 0) {
+        problem.observations.push_back({cam, idx, to_px(o.xy)});
+        ++seen;
+      }
     }
+    problem.points.back().fixed = seen < 2 || (l->revived && config.reuse_fix_revived);
     return idx;
   };
   if (keyframe_window) {
@@ -195,14 +207,14 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
     for (int k = first_free; k < num_kf; ++k) {
       for (const auto& obs : kfs[k].observations) {
         map::Landmark* l = map.landmark(obs.first);
-        if (l && added.insert(obs.first).second) add_point(l);
+        if (l && added.insert(obs.first).second) add_point(l, 0);
       }
     }
   } else {
     for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
       map::Landmark* l = cur_landmarks[i];
       if (!l) continue;
-      const int p = add_point(l);
+      const int p = add_point(l, 1);
       problem.observations.push_back({current_cam, p, to_px(cur_tracks[i].xy)});
     }
   }
@@ -297,6 +309,7 @@ int System::Impl::triangulateNewPoints() {
     geometry::TriangulationResult tr = geometry::triangulatePoint(poses, obs, config.triangulation);
     if (!tr.ok) continue;
     map::Landmark& l = map.addLandmark(t.id, tr.p_w, t.intensity);
+    l.polarity = t.polarity;
     l.num_observations = static_cast<int>(poses.size());
     l.last_seen_frame = frame_index;
     ++created;

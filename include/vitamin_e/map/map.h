@@ -5,7 +5,10 @@
 // landmarks no longer observed are moved to a voxel-thinned archive kept for
 // export. The archive is capped: when it fills up, its voxel doubles and it is
 // thinned again, so memory stays bounded on long runs while every explored
-// place keeps points (at a coarser spacing).
+// place keeps points (at a coarser spacing). Retired landmarks are also kept,
+// with their ids, as dormant landmarks (a bounded FIFO) that a new track at the
+// same place can be re-associated with (map reuse: the old, better anchored
+// position is used again instead of a new, drifted triangulation).
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <deque>
@@ -25,6 +28,8 @@ struct Landmark {
   std::uint64_t id = 0;  // the track id
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   std::uint8_t intensity = 0;
+  std::int8_t polarity = 0;   // sign of the image curvature of its track (+1 / -1, 0 unknown)
+  bool revived = false;       // re-associated from the dormant landmarks (its position predates the window)
   int num_observations = 0;   // keyframes that saw it (incl. retired ones)
   std::uint64_t last_seen_frame = 0;
   int outlier_count = 0;      // times flagged by pose estimation / BA
@@ -39,6 +44,16 @@ struct Keyframe {
   std::unordered_map<std::uint64_t, Eigen::Vector2d> observations;
 };
 
+// A landmark that left the active window, kept for re-association.
+struct DormantLandmark {
+  std::uint64_t id = 0;  // its last track id
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  std::uint8_t intensity = 0;
+  std::int8_t polarity = 0;
+  int num_observations = 0;
+  bool revived = false;  // taken back into the active map (the entry is then a tombstone)
+};
+
 struct ArchivedPoint {
   Eigen::Vector3d p_w;
   std::uint8_t intensity;
@@ -51,7 +66,10 @@ struct MapConfig {
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
   // re-thins the archive to at most half the cap.
   std::size_t max_archive_points = 300000;
-  int min_observations_to_archive = 3;
+  int min_observations_to_archive = 3;  // fewer keyframe observations: a retired landmark is dropped
+  // Retired landmarks kept for re-association (~60 B each); the oldest go first.
+  // 0 turns map reuse from dormant landmarks off.
+  std::size_t max_dormant_landmarks = 100000;
   void validate() const;          // throws std::invalid_argument
 };
 
@@ -78,6 +96,16 @@ class Map {
   const std::deque<Keyframe>& keyframes() const { return keyframes_; }
   std::deque<Keyframe>& keyframes() { return keyframes_; }
 
+  // Re-association (map reuse). relabelLandmark gives an active landmark whose
+  // track ended the id of a new track seen at the same place: the keyframes'
+  // observations move to the new id. reviveDormant brings dormant landmark
+  // `index` back into the active map under `track_id`. Both return false (and
+  // change nothing) when the ids clash: the new id is a landmark already, or a
+  // keyframe observed both tracks (they cannot be one point).
+  bool relabelLandmark(std::uint64_t old_id, std::uint64_t new_id);
+  bool reviveDormant(std::size_t index, std::uint64_t track_id, std::uint64_t frame_index);
+  const std::deque<DormantLandmark>& dormant() const { return dormant_; }
+
   const std::vector<ArchivedPoint>& archive() const { return archive_; }
   double archiveVoxel() const { return archive_voxel_; }  // current thinning voxel (0: none yet)
   // Active landmarks followed by archived points.
@@ -85,6 +113,7 @@ class Map {
 
  private:
   void retireKeyframe(const Keyframe& keyframe);
+  void retireLandmark(const Landmark& landmark);  // to the archive and the dormant landmarks
   void archive(const Landmark& landmark);
   void coarsenArchive();
 
@@ -92,6 +121,7 @@ class Map {
   std::unordered_map<std::uint64_t, Landmark> landmarks_;
   std::deque<Keyframe> keyframes_;
   std::vector<std::uint64_t> orphans_;  // landmarks without keyframe observations, still tracked
+  std::deque<DormantLandmark> dormant_;
   std::vector<ArchivedPoint> archive_;
   double archive_voxel_ = 0.0;
   std::unordered_set<std::uint64_t> archive_voxels_;  // occupied voxels at archive_voxel_

@@ -43,6 +43,14 @@ struct SystemConfig {
   double keyframe_parallax_px = 20.0;   // rotation-compensated median parallax to the last keyframe
   double keyframe_min_mapped_ratio = 0.5;  // fewer mapped tracks than this ratio also asks for a keyframe
   double max_step_depth_ratio = 1.0;    // a per-frame step longer than this x scene depth is a failure
+  // Map reuse: a new, unmapped track within reuse_radius_px of the projection of a
+  // map point whose own track ended (still in the window, or dormant: see
+  // map.max_dormant_landmarks) takes that point over, when the curvature signs
+  // agree, no other track is nearer, and nothing in view is clearly in front of
+  // it. 0 turns map reuse off.
+  double reuse_radius_px = 2.0;
+  double reuse_occlusion_ratio = 1.2;   // farther than this x the nearest mapped depth around it: occluded
+  bool reuse_fix_revived = true;        // revived dormant points stay fixed in BA (they anchor the older map)
 
   void validate() const;        // throws ConfigError naming the key
   std::string describe() const; // readable listing of every value

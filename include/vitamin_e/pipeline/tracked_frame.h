@@ -14,6 +14,7 @@ struct FrameTrack {
   Eigen::Vector2f uv;      // distorted pixel
   Eigen::Vector2d xy;      // normalized undistorted
   std::uint8_t intensity;
+  std::int8_t polarity;    // sign of the image curvature at the extremum (+1 / -1)
 };
 
 // The output of the tracking stage, the input of the mapping stage.

@@ -1,0 +1,162 @@
+// Map reuse: a new track that appears where an existing map point projects takes
+// that point over instead of being triangulated again from the newest (and
+// drifted) keyframes. Candidates are the window's landmarks whose track ended
+// and the dormant landmarks that left the window; an association needs the same
+// curvature sign, no other track nearer to the projection, and no mapped point
+// clearly in front of it (the depth of the map points tracked around it).
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "system_impl.h"
+
+namespace vitamin_e::pipeline {
+
+namespace {
+
+// Tracks bucketed by their pinhole pixel position.
+class TrackGrid {
+ public:
+  explicit TrackGrid(double cell) : cell_(cell) {}
+  void add(const Eigen::Vector2d& px, int index) { cells_[key(cell(px.x()), cell(px.y()))].push_back(index); }
+  template <typename F>
+  void forNear(const Eigen::Vector2d& px, F&& f) const {
+    const long cx = cell(px.x()), cy = cell(px.y());
+    for (long y = cy - 1; y <= cy + 1; ++y) {
+      for (long x = cx - 1; x <= cx + 1; ++x) {
+        auto it = cells_.find(key(x, y));
+        if (it == cells_.end()) continue;
+        for (int i : it->second) f(i);
+      }
+    }
+  }
+
+ private:
+  long cell(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  static std::int64_t key(long x, long y) { return (static_cast<std::int64_t>(x) << 32) ^ (y & 0xffffffffL); }
+  double cell_;
+  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+};
+
+// Smallest depth of the mapped tracks per coarse image cell.
+class DepthGrid {
+ public:
+  DepthGrid(int width, int height, int cell)
+      : cell_(cell), w_(width / cell + 1), h_(height / cell + 1),
+        depth_(static_cast<std::size_t>(w_ * h_), std::numeric_limits<double>::infinity()) {}
+  void add(const Eigen::Vector2d& px, double z) {
+    const int i = index(px);
+    if (i >= 0) depth_[i] = std::min(depth_[i], z);
+  }
+  double at(const Eigen::Vector2d& px) const {
+    const int i = index(px);
+    return i >= 0 ? depth_[i] : std::numeric_limits<double>::infinity();
+  }
+
+ private:
+  int index(const Eigen::Vector2d& px) const {
+    const int x = static_cast<int>(std::floor(px.x() / cell_)), y = static_cast<int>(std::floor(px.y() / cell_));
+    return x >= 0 && y >= 0 && x < w_ && y < h_ ? y * w_ + x : -1;
+  }
+  int cell_, w_, h_;
+  std::vector<double> depth_;
+};
+
+struct Claim {
+  double d2 = std::numeric_limits<double>::infinity();
+  bool dormant = false;
+  std::uint64_t landmark_id = 0;    // active landmark (relabel)
+  std::size_t dormant_index = 0;    // dormant landmark (revive)
+};
+
+}  // namespace
+
+int System::Impl::reuseMapPoints() {
+  const double radius = config.reuse_radius_px;
+  if (!(radius > 0.0) || cur_tracks.empty()) return 0;
+  const Eigen::Isometry3d T_c_w = T_w_cur.inverse();
+  auto pinhole = [&](const Eigen::Vector2d& xy) {
+    return Eigen::Vector2d(camera.fx() * xy.x() + camera.cx(), camera.fy() * xy.y() + camera.cy());
+  };
+  TrackGrid grid(std::max(radius, 1.0));
+  DepthGrid depth(camera.width(), camera.height(), 24);
+  std::unordered_set<std::uint64_t> live_ids;
+  live_ids.reserve(cur_tracks.size() * 2);
+  std::vector<Eigen::Vector2d> track_px(cur_tracks.size());
+  for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
+    track_px[i] = pinhole(cur_tracks[i].xy);
+    grid.add(track_px[i], static_cast<int>(i));
+    live_ids.insert(cur_tracks[i].id);
+    if (const map::Landmark* l = cur_landmarks[i]) {
+      const double z = (T_c_w * l->p_w).z();
+      if (z > 0.0) depth.add(track_px[i], z);
+    }
+  }
+  const double r2 = radius * radius;
+  const double min_depth = 1e-3 * scene_depth;
+  std::vector<Claim> claims(cur_tracks.size());
+  auto consider = [&](const Eigen::Vector3d& p_w, std::int8_t polarity, const Claim& what) {
+    const Eigen::Vector3d p_c = T_c_w * p_w;
+    if (p_c.z() <= min_depth) return;
+    const Eigen::Vector2d px = pinhole(p_c.hnormalized());
+    if (px.x() < 0 || px.y() < 0 || px.x() >= camera.width() || px.y() >= camera.height()) return;
+    if (p_c.z() > config.reuse_occlusion_ratio * depth.at(px)) return;
+    int nearest = -1;
+    double best = std::numeric_limits<double>::infinity();
+    grid.forNear(px, [&](int i) {
+      const double d2 = (track_px[i] - px).squaredNorm();
+      if (d2 < best) {
+        best = d2;
+        nearest = i;
+      }
+    });
+    // The nearest track must be unmapped, of the same curvature sign, and close.
+    if (nearest < 0 || best > r2 || cur_landmarks[nearest]) return;
+    if (polarity != 0 && cur_tracks[nearest].polarity != polarity) return;
+    Claim& c = claims[nearest];
+    if (best < c.d2) {
+      c = what;
+      c.d2 = best;
+    }
+  };
+  for (const auto& kv : map.landmarks()) {
+    if (live_ids.count(kv.first)) continue;
+    Claim c;
+    c.landmark_id = kv.first;
+    consider(kv.second.p_w, kv.second.polarity, c);
+  }
+  const auto& dormant = map.dormant();
+  for (std::size_t k = 0; k < dormant.size(); ++k) {
+    if (dormant[k].revived) continue;
+    Claim c;
+    c.dormant = true;
+    c.dormant_index = k;
+    consider(dormant[k].p_w, dormant[k].polarity, c);
+  }
+  // One track per landmark: a landmark claimed by two tracks goes to the nearer.
+  std::unordered_map<std::uint64_t, std::size_t> winner;  // landmark key -> track index
+  auto key_of = [](const Claim& c) { return c.dormant ? (c.dormant_index << 1 | 1) : (c.landmark_id << 1); };
+  for (std::size_t i = 0; i < claims.size(); ++i) {
+    if (!std::isfinite(claims[i].d2)) continue;
+    auto [it, inserted] = winner.emplace(key_of(claims[i]), i);
+    if (!inserted && claims[i].d2 < claims[it->second].d2) it->second = i;
+  }
+  int reused = 0;
+  for (const auto& kv : winner) {
+    const Claim& c = claims[kv.second];
+    const FrameTrack& t = cur_tracks[kv.second];
+    const bool ok = c.dormant ? map.reviveDormant(c.dormant_index, t.id, frame_index)
+                              : map.relabelLandmark(c.landmark_id, t.id);
+    if (!ok) continue;
+    map::Landmark* l = map.landmark(t.id);
+    l->last_seen_frame = frame_index;
+    if (l->polarity == 0) l->polarity = t.polarity;
+    ++reused;
+  }
+  if (reused > 0) refreshCurrentLandmarks();
+  reused_points += static_cast<std::uint64_t>(reused);
+  return reused;
+}
+
+}  // namespace vitamin_e::pipeline
