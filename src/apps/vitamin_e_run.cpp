@@ -319,6 +319,7 @@ int run(const Options& o) {
   stats.tracked_frames = system.framesTracked();
   stats.first_init_frame = system.firstInitFrame();
   stats.tracked_since_init = system.framesTrackedSinceInit();
+  stats.reused_map_points = system.reusedMapPoints();
 
   std::string err;
   const std::vector<pl::MapPoint3> points = system.mapPoints();

@@ -102,6 +102,7 @@ std::string toJson(const RunStats& s) {
   os << "  \"init_retries\": " << s.init_retries << ",\n";
   os << "  \"first_init_frame\": " << s.first_init_frame << ",\n";
   os << "  \"tracked_since_init\": " << s.tracked_since_init << ",\n";
+  os << "  \"reused_map_points\": " << s.reused_map_points << ",\n";
   os << "  \"success_after_init\": " << number(s.successAfterInit()) << ",\n";
   os << "  \"interrupted\": " << (s.interrupted ? "true" : "false") << ",\n";
   os << "  \"map_points\": " << s.map_points << ",\n";

@@ -21,6 +21,7 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   s.skipped_frames = 1;
   s.first_init_frame = 1;
   s.tracked_since_init = 1;
+  s.reused_map_points = 17;
   s.map_points = 1234;
   s.peak_rss_mb = peakRssMb();
   EXPECT_GT(s.peak_rss_mb, 1.0);
@@ -36,6 +37,7 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   EXPECT_EQ(j["init_retries"].as<int>(), 2);
   EXPECT_EQ(j["first_init_frame"].as<int>(), 1);
   EXPECT_EQ(j["tracked_since_init"].as<int>(), 1);
+  EXPECT_EQ(j["reused_map_points"].as<int>(), 17);
   EXPECT_DOUBLE_EQ(j["success_after_init"].as<double>(), 0.5);  // 1 of the 2 frames from frame 1 on
   EXPECT_EQ(j["map_points"].as<int>(), 1234);
   EXPECT_FALSE(j["interrupted"].as<bool>());

@@ -101,6 +101,76 @@ TEST(Map, ArchiveStaysUnderItsCapAndKeepsEveryPlaceExplored) {
   EXPECT_GT(last, 0);
 }
 
+TEST(Map, RetiredLandmarksStayDormantUpToTheirCapAndCanBeRevived) {
+  MapConfig cfg;
+  cfg.max_keyframes = 2;
+  cfg.min_observations_to_archive = 1;
+  cfg.max_dormant_landmarks = 30;
+  Map map(cfg);
+  for (std::uint64_t k = 0; k < 6; ++k) {
+    for (std::uint64_t id = 100 * k; id < 100 * k + 20; ++id) {
+      auto& l = map.addLandmark(id, Eigen::Vector3d(double(id), 0, 1), 9);
+      l.polarity = -1;
+      l.num_observations = 1;
+    }
+    map.addKeyframe(keyframeSeeing(k, 100 * k, 20));
+  }
+  // Keyframes 0-3 retired 80 landmarks; the newest 30 are dormant: all 20 of
+  // keyframe 3 and 10 of keyframe 2 (in no particular order within a keyframe).
+  ASSERT_EQ(map.dormant().size(), 30u);
+  int from_kf3 = 0;
+  for (const auto& d : map.dormant()) {
+    EXPECT_TRUE(d.id >= 200 && d.id < 320 && (d.id % 100) < 20) << d.id;
+    from_kf3 += d.id >= 300 ? 1 : 0;
+    EXPECT_EQ(d.polarity, -1);
+    EXPECT_EQ(d.p_w.x(), double(d.id));
+  }
+  EXPECT_EQ(from_kf3, 20);
+  // Revived under a new track id: active again, flagged, with its old position.
+  const double x = map.dormant().back().p_w.x();
+  ASSERT_TRUE(map.reviveDormant(29, 7777, 42));
+  const auto* l = map.landmark(7777);
+  ASSERT_NE(l, nullptr);
+  EXPECT_TRUE(l->revived);
+  EXPECT_EQ(l->p_w.x(), x);
+  EXPECT_EQ(l->last_seen_frame, 42u);
+  EXPECT_TRUE(map.dormant().back().revived);
+  EXPECT_FALSE(map.reviveDormant(29, 7778, 42));  // already taken
+  EXPECT_FALSE(map.reviveDormant(28, 500, 42));   // the id is an active landmark
+  // A new map (re-initialization) has another scale: nothing dormant survives.
+  map.clear();
+  EXPECT_TRUE(map.dormant().empty());
+}
+
+TEST(Map, RelabelMovesKeyframeObservationsAndRefusesClashes) {
+  MapConfig cfg;
+  cfg.max_keyframes = 4;
+  Map map(cfg);
+  Keyframe a = keyframeSeeing(1, 10, 1);
+  Keyframe b = keyframeSeeing(2, 10, 1);
+  b.observations.emplace(20, Eigen::Vector2d(0.5, 0.5));  // track 20 and 10 in one keyframe
+  Keyframe c = keyframeSeeing(3, 30, 1);                   // a new track, 30, not yet mapped
+  map.addKeyframe(a);
+  map.addKeyframe(b);
+  map.addKeyframe(c);
+  map.addLandmark(10, Eigen::Vector3d(1, 2, 3), 5);
+  ASSERT_EQ(map.landmark(10)->observations.size(), 2u);
+  EXPECT_FALSE(map.relabelLandmark(10, 20));  // both seen by keyframe 2: two different points
+  EXPECT_FALSE(map.relabelLandmark(11, 30));  // no such landmark
+  ASSERT_TRUE(map.relabelLandmark(10, 30));
+  EXPECT_EQ(map.landmark(10), nullptr);
+  const auto* l = map.landmark(30);
+  ASSERT_NE(l, nullptr);
+  EXPECT_EQ(l->id, 30u);
+  ASSERT_EQ(l->observations.size(), 3u);  // keyframes 1 and 2 (moved) and 3 (its own)
+  EXPECT_EQ(l->observations.front().keyframe, 1u);
+  EXPECT_EQ(l->observations.back().keyframe, 3u);
+  for (const auto& kf : map.keyframes()) {
+    EXPECT_EQ(kf.observations.count(10), 0u);
+    EXPECT_EQ(kf.observations.count(30), 1u);
+  }
+}
+
 TEST(Map, RejectsBadConfig) {
   MapConfig cfg;
   cfg.max_keyframes = 1;

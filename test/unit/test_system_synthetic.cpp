@@ -22,6 +22,7 @@ struct SyntheticRun {
   std::size_t frames_tracked = 0;
   long long first_init_frame = -1;
   std::size_t tracked_since_init = 0;
+  std::size_t reused_map_points = 0;
   int init_retries = 0;
 };
 
@@ -67,6 +68,7 @@ SyntheticRun runSynthetic(std::uint64_t seed, bool pipelined = false) {
   run.frames_tracked = system.framesTracked();
   run.first_init_frame = system.firstInitFrame();
   run.tracked_since_init = system.framesTrackedSinceInit();
+  run.reused_map_points = system.reusedMapPoints();
   run.init_retries = system.initRetries();
   return run;
 }
@@ -109,6 +111,8 @@ TEST(SystemSynthetic, InitializesAndTracksEveryFrameAfterwards) {
   EXPECT_EQ(run.tracked_since_init, run.results.size() - first_tracked);
   EXPECT_GT(run.frames_tracked, run.tracked_since_init);  // plus the reference frame
   EXPECT_GT(run.results.back().num_mapped, 1000u);
+  // Tracks end and new ones start on the same texture: some take over map points.
+  EXPECT_GT(run.reused_map_points, 0u);
 }
 
 TEST(SystemSynthetic, TrajectoryMatchesGroundTruthAfterSim3Alignment) {

@@ -19,6 +19,7 @@ struct RunStats {
   int init_retries = 0;
   long long first_init_frame = -1;      // frame at which the first map was built (-1: never)
   std::size_t tracked_since_init = 0;    // tracked frames from that frame on
+  std::size_t reused_map_points = 0;     // map points taken over by new tracks (map reuse)
   std::size_t map_points = 0;    // points written to points.ply
   bool interrupted = false;      // stopped by SIGINT/SIGTERM
   double wall_time_s = 0.0;

@@ -58,6 +58,8 @@ class System {
   // localized at the initialization are not counted).
   std::size_t framesTrackedSinceInit() const;
   int initRetries() const;
+  // Map points taken over by new tracks (map reuse, see SystemConfig::reuse_radius_px).
+  std::size_t reusedMapPoints() const;
   const StageTimings& timings() const;
   const SystemConfig& config() const;
   const camera::Camera& camera() const;
