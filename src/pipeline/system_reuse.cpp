@@ -7,7 +7,6 @@
 #include <cmath>
 #include <limits>
 #include <unordered_map>
-#include <unordered_set>
 
 #include "system_impl.h"
 
@@ -15,28 +14,45 @@ namespace vitamin_e::pipeline {
 
 namespace {
 
-// Tracks bucketed by their pinhole pixel position.
+// Tracks bucketed by their pinhole pixel position (a counting sort into square
+// cells over the image; tracks outside it are left out).
 class TrackGrid {
  public:
-  explicit TrackGrid(double cell) : cell_(cell) {}
-  void add(const Eigen::Vector2d& px, int index) { cells_[key(cell(px.x()), cell(px.y()))].push_back(index); }
+  TrackGrid(int width, int height, double cell)
+      : inv_cell_(1.0 / cell), w_(static_cast<int>(width / cell) + 1), h_(static_cast<int>(height / cell) + 1) {}
+  void build(const std::vector<Eigen::Vector2d>& px) {
+    start_.assign(static_cast<std::size_t>(w_ * h_) + 1, 0);
+    std::vector<int> cell_of(px.size());
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      cell_of[i] = index(cellOf(px[i].x()), cellOf(px[i].y()));
+      if (cell_of[i] >= 0) ++start_[cell_of[i] + 1];
+    }
+    for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    items_.resize(start_.back());
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      if (cell_of[i] >= 0) items_[fill[cell_of[i]]++] = static_cast<int>(i);
+    }
+  }
   template <typename F>
   void forNear(const Eigen::Vector2d& px, F&& f) const {
-    const long cx = cell(px.x()), cy = cell(px.y());
-    for (long y = cy - 1; y <= cy + 1; ++y) {
-      for (long x = cx - 1; x <= cx + 1; ++x) {
-        auto it = cells_.find(key(x, y));
-        if (it == cells_.end()) continue;
-        for (int i : it->second) f(i);
+    const int cx = cellOf(px.x()), cy = cellOf(px.y());
+    for (int y = cy - 1; y <= cy + 1; ++y) {
+      for (int x = cx - 1; x <= cx + 1; ++x) {
+        const int c = index(x, y);
+        if (c < 0) continue;
+        for (int k = start_[c]; k < start_[c + 1]; ++k) f(items_[k]);
       }
     }
   }
 
  private:
-  long cell(double v) const { return static_cast<long>(std::floor(v / cell_)); }
-  static std::int64_t key(long x, long y) { return (static_cast<std::int64_t>(x) << 32) ^ (y & 0xffffffffL); }
-  double cell_;
-  std::unordered_map<std::int64_t, std::vector<int>> cells_;
+  int cellOf(double v) const { return static_cast<int>(std::floor(v * inv_cell_)); }
+  int index(int x, int y) const { return x >= 0 && y >= 0 && x < w_ && y < h_ ? y * w_ + x : -1; }
+  double inv_cell_;
+  int w_, h_;
+  std::vector<int> start_;  // per cell, its first entry in items_
+  std::vector<int> items_;
 };
 
 // Smallest depth of the mapped tracks per coarse image cell.
@@ -79,20 +95,17 @@ int System::Impl::reuseMapPoints() {
   auto pinhole = [&](const Eigen::Vector2d& xy) {
     return Eigen::Vector2d(camera.fx() * xy.x() + camera.cx(), camera.fy() * xy.y() + camera.cy());
   };
-  TrackGrid grid(std::max(radius, 1.0));
+  TrackGrid grid(camera.width(), camera.height(), std::max(radius, 1.0));
   DepthGrid depth(camera.width(), camera.height(), 24);
-  std::unordered_set<std::uint64_t> live_ids;
-  live_ids.reserve(cur_tracks.size() * 2);
   std::vector<Eigen::Vector2d> track_px(cur_tracks.size());
   for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
     track_px[i] = pinhole(cur_tracks[i].xy);
-    grid.add(track_px[i], static_cast<int>(i));
-    live_ids.insert(cur_tracks[i].id);
     if (const map::Landmark* l = cur_landmarks[i]) {
       const double z = (T_c_w * l->p_w).z();
       if (z > 0.0) depth.add(track_px[i], z);
     }
   }
+  grid.build(track_px);
   const double r2 = radius * radius;
   const double min_depth = 1e-3 * scene_depth;
   std::vector<Claim> claims(cur_tracks.size());
@@ -120,8 +133,9 @@ int System::Impl::reuseMapPoints() {
       c.d2 = best;
     }
   };
+  // Landmarks whose track ended: not seen in this frame (track() marks the seen).
   for (const auto& kv : map.landmarks()) {
-    if (live_ids.count(kv.first)) continue;
+    if (kv.second.last_seen_frame == frame_index) continue;
     Claim c;
     c.landmark_id = kv.first;
     consider(kv.second.p_w, kv.second.polarity, c);

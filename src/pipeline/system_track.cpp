@@ -31,14 +31,18 @@ void System::Impl::track(FrameResult* result) {
             " map points of the previous frame are still tracked";
     }
     const bool ok = !vanished && estimatePose(&T_w_c, &why);
-    if (ok) {
-      // Localized: new tracks where old map points project take them over.
-      T_w_cur = T_w_c;
-      reuseMapPoints();
-    }
     const double ms = elapsedMs(t0);
     addTiming("pose", ms);
     result->timing_ms["pose"] = ms;
+    if (ok) {
+      // Localized: new tracks where old map points project take them over.
+      const auto t1 = std::chrono::steady_clock::now();
+      T_w_cur = T_w_c;
+      reuseMapPoints();
+      const double reuse_ms = elapsedMs(t1);
+      addTiming("reuse", reuse_ms);
+      result->timing_ms["reuse"] = reuse_ms;
+    }
     if (!ok) {
       ++init_retries;
       resetMap();
