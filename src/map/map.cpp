@@ -31,6 +31,7 @@ Map::Map(const MapConfig& config) : config_(config), archive_voxel_(config.archi
 
 void Map::clear() {
   orphans_.clear();
+  dormant_dropped_ += dormant_.size();
   dormant_.clear();  // a new map has a new scale and frame: the old points do not fit it
   landmarks_.clear();
   keyframes_.clear();
@@ -127,7 +128,10 @@ void Map::retireLandmark(const Landmark& l) {
   d.polarity = l.polarity;
   d.num_observations = l.num_observations;
   dormant_.push_back(d);
-  while (dormant_.size() > config_.max_dormant_landmarks) dormant_.pop_front();
+  while (dormant_.size() > config_.max_dormant_landmarks) {
+    dormant_.pop_front();
+    ++dormant_dropped_;
+  }
 }
 
 namespace {

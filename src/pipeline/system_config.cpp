@@ -152,6 +152,7 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("pipeline", "reuse_radius_px", &c.reuse_radius_px));
   f.push_back(field("pipeline", "reuse_occlusion_ratio", &c.reuse_occlusion_ratio));
   f.push_back(field("pipeline", "reuse_fix_revived", &c.reuse_fix_revived));
+  f.push_back(field("pipeline", "reuse_dormant_per_frame", &c.reuse_dormant_per_frame));
   // init (two-view); focal_px is taken from the camera
   auto& in = c.init;
   f.push_back(field("init", "ransac_threshold_px", &in.ransac_threshold_px));
@@ -274,6 +275,7 @@ void SystemConfig::validate() const {
   check(max_step_depth_ratio > 0.0, "pipeline.max_step_depth_ratio must be > 0");
   check(reuse_radius_px >= 0.0 && reuse_radius_px <= 20.0, "pipeline.reuse_radius_px must be in [0, 20]");
   check(reuse_occlusion_ratio >= 1.0, "pipeline.reuse_occlusion_ratio must be >= 1");
+  check(reuse_dormant_per_frame >= 1, "pipeline.reuse_dormant_per_frame must be >= 1");
 }
 
 std::string SystemConfig::describe() const {

@@ -89,7 +89,8 @@ struct System::Impl {
   // initialization
   std::deque<PendingFrame> pending;  // pending.front() is the reference frame
   std::uint64_t frames_since_keyframe = 0;
-  std::uint64_t reused_points = 0;  // map points taken over by new tracks (map reuse)
+  std::uint64_t reused_points = 0;
+  std::uint64_t dormant_cursor = 0;  // next dormant entry to check (in retirement order, see Map::dormantDropped)  // map points taken over by new tracks (map reuse)
 
   std::vector<TrajectoryEntry> trajectory;
 };

@@ -140,14 +140,22 @@ int System::Impl::reuseMapPoints() {
     c.landmark_id = kv.first;
     consider(kv.second.p_w, kv.second.polarity, c);
   }
+  // Dormant landmarks, a bounded slice per frame in round robin: a new track
+  // stays unmapped until the next keyframe, so it is met by several slices.
   const auto& dormant = map.dormant();
-  for (std::size_t k = 0; k < dormant.size(); ++k) {
+  const std::size_t budget = std::min<std::size_t>(dormant.size(), config.reuse_dormant_per_frame);
+  const std::uint64_t dropped = map.dormantDropped();
+  std::size_t start = dormant_cursor > dropped ? static_cast<std::size_t>(dormant_cursor - dropped) : 0;
+  if (start >= dormant.size()) start = 0;
+  for (std::size_t n = 0; n < budget; ++n) {
+    const std::size_t k = (start + n) % dormant.size();
     if (dormant[k].revived) continue;
     Claim c;
     c.dormant = true;
     c.dormant_index = k;
     consider(dormant[k].p_w, dormant[k].polarity, c);
   }
+  if (!dormant.empty()) dormant_cursor = dropped + (start + budget) % dormant.size();
   // One track per landmark: a landmark claimed by two tracks goes to the nearer.
   std::unordered_map<std::uint64_t, std::size_t> winner;  // landmark key -> track index
   auto key_of = [](const Claim& c) { return c.dormant ? (c.dormant_index << 1 | 1) : (c.landmark_id << 1); };

@@ -105,6 +105,9 @@ class Map {
   bool relabelLandmark(std::uint64_t old_id, std::uint64_t new_id);
   bool reviveDormant(std::size_t index, std::uint64_t track_id, std::uint64_t frame_index);
   const std::deque<DormantLandmark>& dormant() const { return dormant_; }
+  // Dormant landmarks ever dropped from the front (index i of dormant() is entry
+  // number dormantDropped() + i in the order of retirement).
+  std::uint64_t dormantDropped() const { return dormant_dropped_; }
 
   const std::vector<ArchivedPoint>& archive() const { return archive_; }
   double archiveVoxel() const { return archive_voxel_; }  // current thinning voxel (0: none yet)
@@ -122,6 +125,7 @@ class Map {
   std::deque<Keyframe> keyframes_;
   std::vector<std::uint64_t> orphans_;  // landmarks without keyframe observations, still tracked
   std::deque<DormantLandmark> dormant_;
+  std::uint64_t dormant_dropped_ = 0;
   std::vector<ArchivedPoint> archive_;
   double archive_voxel_ = 0.0;
   std::unordered_set<std::uint64_t> archive_voxels_;  // occupied voxels at archive_voxel_

@@ -51,6 +51,7 @@ struct SystemConfig {
   double reuse_radius_px = 2.0;
   double reuse_occlusion_ratio = 1.2;   // farther than this x the nearest mapped depth around it: occluded
   bool reuse_fix_revived = true;        // revived dormant points stay fixed in BA (they anchor the older map)
+  int reuse_dormant_per_frame = 25000;  // dormant points checked per frame, round robin (bounds the cost)
 
   void validate() const;        // throws ConfigError naming the key
   std::string describe() const; // readable listing of every value
