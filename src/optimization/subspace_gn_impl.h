@@ -20,7 +20,8 @@ namespace detail {
 
 using geometry::Matrix6d;
 using geometry::Vector6d;
-using Matrix63d = Eigen::Matrix<double, 6, 3>;
+using Matrix26d = Eigen::Matrix<double, 2, 6>;
+using Matrix23d = Eigen::Matrix<double, 2, 3>;
 
 constexpr double kMinDepth = 1e-9;
 
@@ -83,15 +84,22 @@ class SubspaceGn {
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
   int rejected_ = 0;
-  std::vector<Matrix6d> Hcc_;
+  std::vector<Matrix6d> Hcc_, Hd_;
   BlockMatrix6 S_;
   std::vector<Vector6d> gc_, b_, dc_;
   std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, R_;
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
-  std::vector<Matrix63d> Hcp_, Y_;
+  // Per slot (free camera, free point): the two rows of d r / d camera and the two rows of
+  // d r / d point scaled by the IRLS weight, so that H_cp = Jc^T Wjp. Kept as rows (rank 2)
+  // instead of the 6x3 product: the Schur complement and the coupling products are cheaper
+  // through the 2-dimensional residual space.
+  std::vector<Matrix26d> Jc_;
+  std::vector<Matrix23d> Wjp_;
   std::vector<Eigen::Isometry3d> saved_cams_;
   std::vector<std::vector<Matrix6d>> Hcc_t_;  // per-thread camera blocks (upper triangle)
   std::vector<std::vector<Vector6d>> gc_t_;
+  std::vector<BlockMatrix6> S_t_;              // per-thread reduced camera system (threads > 1)
+  std::vector<std::vector<Vector6d>> b_t_;
 };
 
 }  // namespace detail

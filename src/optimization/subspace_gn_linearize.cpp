@@ -80,8 +80,8 @@ void SubspaceGn::buildStructure() {
   Hpp_inv_.resize(npf);
   dp_.resize(npf);
   q_.resize(npf);
-  Hcp_.resize(slot_cam_.size());
-  if (O_.use_schur) Y_.resize(slot_cam_.size());
+  Jc_.resize(slot_cam_.size());
+  Wjp_.resize(slot_cam_.size());
   // Constant cost of the observations with nothing free.
   fixed_cost_ = 0.0;
   Eigen::Vector2d r;
@@ -136,8 +136,9 @@ struct ObsEval {
       (*g)(l) += jp0[l] * wr0 + jp1[l] * wr1;
     }
   }
-  // Camera rows: Hcc += w Jc^T Jc (upper triangle), gc += w Jc^T r, Hcp = w Jc^T Jp.
-  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* gc, Matrix63d* Hcp) const {
+  // Camera rows: Hcc += w Jc^T Jc (upper triangle), gc += w Jc^T r; with Jc/Wjp, stores the
+  // camera rows and the weighted point rows (H_cp = Jc^T Wjp).
+  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* gc, Matrix26d* Jc, Matrix23d* Wjp) const {
     const double jc0[6] = {A, 0.0, B, B * y, A * z - B * x, -A * y};
     const double jc1[6] = {0.0, C, D, D * y - C * z, -D * x, C * x};
     const double wr0 = w * r0, wr1 = w * r1;
@@ -145,8 +146,16 @@ struct ObsEval {
       const double a0 = w * jc0[l], a1 = w * jc1[l];
       for (int k = 0; k <= l; ++k) (*Hcc)(k, l) += a0 * jc0[k] + a1 * jc1[k];
       (*gc)(l) += jc0[l] * wr0 + jc1[l] * wr1;
-      if (Hcp)
-        for (int m = 0; m < 3; ++m) (*Hcp)(l, m) = a0 * jp0[m] + a1 * jp1[m];
+    }
+    if (Jc) {
+      for (int l = 0; l < 6; ++l) {
+        (*Jc)(0, l) = jc0[l];
+        (*Jc)(1, l) = jc1[l];
+      }
+      for (int m = 0; m < 3; ++m) {
+        (*Wjp)(0, m) = w * jp0[m];
+        (*Wjp)(1, m) = w * jp1[m];
+      }
     }
   }
 };
@@ -185,7 +194,10 @@ double SubspaceGn::linearize() {
         ObsEval e;
         if (!e.residual(K_, R_[c], t_[c], p, obs_uv_[a])) {
           cost += kernel_.sigma2;
-          if (s >= 0) Hcp_[s].setZero();
+          if (s >= 0) {
+            Jc_[s].setZero();
+            Wjp_[s].setZero();
+          }
           continue;
         }
         cost += kernel_.rho(e.sq);
@@ -194,7 +206,7 @@ double SubspaceGn::linearize() {
         e.addPoint(w, &H, &g);
         if (s >= 0) {
           const int ci = slot_cam_[s];
-          e.addCamera(w, &Hcc[ci], &gc[ci], &Hcp_[s]);
+          e.addCamera(w, &Hcc[ci], &gc[ci], &Jc_[s], &Wjp_[s]);
         }
       }
       mirrorUpper<3>(&H);
@@ -223,7 +235,7 @@ double SubspaceGn::linearize() {
       continue;
     }
     cost += kernel_.rho(e.sq);
-    e.addCamera(kernel_.weight(e.sq), &Hcc_[ci], &gc_[ci], nullptr);
+    e.addCamera(kernel_.weight(e.sq), &Hcc_[ci], &gc_[ci], nullptr, nullptr);
   }
   for (int i = 0; i < ncf; ++i) mirrorUpper<6>(&Hcc_[i]);
   return cost;
