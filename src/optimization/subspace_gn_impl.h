@@ -63,12 +63,18 @@ class SubspaceGn {
   // point's cost only involves its own observations, so every step is checked and kept per
   // point). Returns the total cost decrease.
   double refinePoints(int iterations);
+  // Robust cost of free point j's observations with the point at x (cameras as cached); with
+  // H and g, also the point's IRLS block and gradient there.
+  double evalPoint(int j, const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) const;
   // Eq. 12: dp_j = -H_pp^-1 (g_p + sum_i H_pc dc_i), independent per point.
   void pointUpdates();
   void cacheCameras();
   void saveState();
   void restoreState();
   void applyStep();
+  // Robust cost of the active part at the current estimate. With point_iterations > 0 it also
+  // keeps each free point's cost, 3x3 block and gradient (cameras fixed) at this estimate:
+  // when the step is accepted they are the first linearization of refinePoints.
   double activeCost();
 
   BaProblem& P_;
@@ -89,6 +95,9 @@ class SubspaceGn {
   std::vector<Vector6d> gc_, b_, dc_;
   std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, R_;
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
+  std::vector<Eigen::Matrix3d> ref_H_;  // activeCost's per-point blocks for refinePoints
+  std::vector<Eigen::Vector3d> ref_g_;
+  std::vector<double> ref_c_;
   // Per slot (free camera, free point): the two rows of d r / d camera and the two rows of
   // d r / d point scaled by the IRLS weight, so that H_cp = Jc^T Wjp. Kept as rows (rank 2)
   // instead of the 6x3 product: the Schur complement and the coupling products are cheaper

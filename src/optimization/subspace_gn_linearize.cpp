@@ -97,13 +97,13 @@ namespace {
 // of the pinhole Jacobian [A 0 B; 0 C D], the rows of d r / d p_w (jp0, jp1) and of
 // d r / d camera (jc0, jc1, right-perturbation). Same formulas as reprojectionJacobians.
 struct ObsEval {
-  double x, y, z, r0, r1, sq;
+  double x, y, z, r0, r1, sq, inv;  // inv = 1 / (sigma^2 + sq)
   double A, B, C, D;
   double jp0[3], jp1[3];
 
   // Returns false when the point is at depth <= min_depth (no residual).
-  inline bool residual(const geometry::Pinhole& K, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
-                       const Eigen::Vector3d& p, const Eigen::Vector2d& uv) {
+  inline bool residual(const geometry::Pinhole& K, double sigma2, const Eigen::Matrix3d& R,
+                       const Eigen::Vector3d& t, const Eigen::Vector3d& p, const Eigen::Vector2d& uv) {
     const double* m = R.data();
     const double d0 = p.x() - t.x(), d1 = p.y() - t.y(), d2 = p.z() - t.z();
     x = m[0] * d0 + m[1] * d1 + m[2] * d2;
@@ -116,10 +116,15 @@ struct ObsEval {
     r0 = uv.x() - (A * x + K.cx);
     r1 = uv.y() - (C * y + K.cy);
     sq = r0 * r0 + r1 * r1;
+    inv = 1.0 / (sigma2 + sq);
     B = -A * x * iz;
     D = -C * y * iz;
     return true;
   }
+  // Geman-McClure (geometry::GemanMcClure) from the one division: rho = sigma^2 s / (sigma^2 + s),
+  // IRLS weight rho' = sigma^4 / (sigma^2 + s)^2.
+  inline double rho(double sigma2) const { return sigma2 * sq * inv; }
+  inline double weight(double sigma2) const { return sigma2 * sigma2 * inv * inv; }
   inline void pointJacobian(const Eigen::Matrix3d& R) {
     const double* m = R.data();
     for (int k = 0; k < 3; ++k) {
@@ -192,7 +197,7 @@ double SubspaceGn::linearize() {
         const int c = obs_cam_[a];
         const int s = obs_slot_[a];
         ObsEval e;
-        if (!e.residual(K_, R_[c], t_[c], p, obs_uv_[a])) {
+        if (!e.residual(K_, kernel_.sigma2, R_[c], t_[c], p, obs_uv_[a])) {
           cost += kernel_.sigma2;
           if (s >= 0) {
             Jc_[s].setZero();
@@ -200,8 +205,8 @@ double SubspaceGn::linearize() {
           }
           continue;
         }
-        cost += kernel_.rho(e.sq);
-        const double w = kernel_.weight(e.sq);
+        cost += e.rho(kernel_.sigma2);
+        const double w = e.weight(kernel_.sigma2);
         e.pointJacobian(R_[c]);
         e.addPoint(w, &H, &g);
         if (s >= 0) {
@@ -230,15 +235,34 @@ double SubspaceGn::linearize() {
     const BaObservation& o = P_.observations[k];
     const int ci = cam_var_[o.camera];
     ObsEval e;
-    if (!e.residual(K_, R_[o.camera], t_[o.camera], P_.points[o.point].p_w, o.uv)) {
+    if (!e.residual(K_, kernel_.sigma2, R_[o.camera], t_[o.camera], P_.points[o.point].p_w, o.uv)) {
       cost += kernel_.sigma2;
       continue;
     }
-    cost += kernel_.rho(e.sq);
-    e.addCamera(kernel_.weight(e.sq), &Hcc_[ci], &gc_[ci], nullptr, nullptr);
+    cost += e.rho(kernel_.sigma2);
+    e.addCamera(e.weight(kernel_.sigma2), &Hcc_[ci], &gc_[ci], nullptr, nullptr);
   }
   for (int i = 0; i < ncf; ++i) mirrorUpper<6>(&Hcc_[i]);
   return cost;
+}
+
+double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) const {
+  double c = 0.0;
+  if (H) H->setZero(), g->setZero();
+  for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
+    const int cam = obs_cam_[a];
+    ObsEval e;
+    if (!e.residual(K_, kernel_.sigma2, R_[cam], t_[cam], x, obs_uv_[a])) {
+      c += kernel_.sigma2;
+      continue;
+    }
+    c += e.rho(kernel_.sigma2);
+    if (!H) continue;
+    e.pointJacobian(R_[cam]);
+    e.addPoint(e.weight(kernel_.sigma2), H, g);
+  }
+  if (H) mirrorUpper<3>(H);
+  return c;
 }
 
 double SubspaceGn::refinePoints(int iterations) {
@@ -248,42 +272,26 @@ double SubspaceGn::refinePoints(int iterations) {
   parallelFor(freePoints(), T, [&](int begin, int end, int t) {
     for (int j = begin; j < end; ++j) {
       Eigen::Vector3d p = P_.points[pts_[j]].p_w;
-      auto eval = [&](const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) {
-        double c = 0.0;
-        if (H) H->setZero(), g->setZero();
-        for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
-          const int cam = obs_cam_[a];
-          ObsEval e;
-          if (!e.residual(K_, R_[cam], t_[cam], x, obs_uv_[a])) {
-            c += kernel_.sigma2;
-            continue;
-          }
-          c += kernel_.rho(e.sq);
-          if (!H) continue;
-          e.pointJacobian(R_[cam]);
-          e.addPoint(kernel_.weight(e.sq), H, g);
-        }
-        if (H) mirrorUpper<3>(H);
-        return c;
-      };
       double lambda = O_.initial_lambda;
-      Eigen::Matrix3d H;
-      Eigen::Vector3d g;
+      // The first linearization is activeCost's, at this same estimate.
+      Eigen::Matrix3d H = ref_H_[j];
+      Eigen::Vector3d g = ref_g_[j];
+      double c0 = ref_c_[j];
       for (int it = 0; it < iterations; ++it) {
-        const double c0 = eval(p, &H, &g);
+        if (it > 0) c0 = evalPoint(j, p, &H, &g);
         bool improved = false;
         double gain = 0.0;
         for (int attempt = 0; attempt < 3 && !improved; ++attempt) {
           Eigen::Matrix3d Hd = H;
           Hd.diagonal() = Hd.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
           const Eigen::Vector3d dp = -(Hd.inverse() * g);
-          double c1 = eval(p + dp, nullptr, nullptr);
+          double c1 = evalPoint(j, p + dp, nullptr, nullptr);
           if (c1 < c0) {
             // The IRLS model over-estimates the curvature of Geman-McClure (rho'' < 0), so its
             // steps fall short: try doubling the step while the cost keeps decreasing.
             double scale = 1.0;
             for (int e = 0; e < O_.point_extrapolation; ++e) {
-              const double c2 = eval(p + (2.0 * scale) * dp, nullptr, nullptr);
+              const double c2 = evalPoint(j, p + (2.0 * scale) * dp, nullptr, nullptr);
               if (!(c2 < c1)) break;
               c1 = c2;
               scale *= 2.0;
@@ -340,16 +348,23 @@ void SubspaceGn::applyStep() {
 double SubspaceGn::activeCost() {
   cacheCameras();
   const int T = std::max(1, O_.threads);
+  const bool keep = O_.point_iterations > 0;
+  if (keep) {
+    ref_H_.resize(pts_.size());
+    ref_g_.resize(pts_.size());
+    ref_c_.resize(pts_.size());
+  }
   std::vector<double> cost_t(T, 0.0);
-  auto term = [&](int cam, const Eigen::Vector3d& p_w, const Eigen::Vector2d& uv) {
-    ObsEval e;
-    return e.residual(K_, R_[cam], t_[cam], p_w, uv) ? kernel_.rho(e.sq) : kernel_.sigma2;
-  };
   parallelFor(freePoints(), T, [&](int begin, int end, int t) {
     double c = 0.0;
     for (int j = begin; j < end; ++j) {
-      const Eigen::Vector3d p = P_.points[pts_[j]].p_w;
-      for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) c += term(obs_cam_[a], p, obs_uv_[a]);
+      const Eigen::Vector3d& p = P_.points[pts_[j]].p_w;
+      if (keep) {
+        ref_c_[j] = evalPoint(j, p, &ref_H_[j], &ref_g_[j]);
+        c += ref_c_[j];
+      } else {
+        c += evalPoint(j, p, nullptr, nullptr);
+      }
     }
     cost_t[t] = c;
   });
@@ -357,7 +372,10 @@ double SubspaceGn::activeCost() {
   for (double c : cost_t) cost += c;
   for (int k : cam_only_obs_) {
     const BaObservation& o = P_.observations[k];
-    cost += term(o.camera, P_.points[o.point].p_w, o.uv);
+    ObsEval e;
+    cost += e.residual(K_, kernel_.sigma2, R_[o.camera], t_[o.camera], P_.points[o.point].p_w, o.uv)
+                ? e.rho(kernel_.sigma2)
+                : kernel_.sigma2;
   }
   return cost;
 }
