@@ -83,8 +83,9 @@ void SubspaceGn::solveStep(double lambda) {
   const int npf = freePoints();
   Hd_.resize(ncf);
   for (int i = 0; i < ncf; ++i) {
+    // Marquardt damping on the diagonal of the whole H_cc: + lambda diag(H_cc) + eps.
     Hd_[i] = Hcc_[i];
-    Hd_[i].diagonal() = Hd_[i].diagonal() * (1.0 + lambda) + Vector6d::Constant(1e-12 * (1.0 + Hd_[i].trace()));
+    Hd_[i].diagonal() += hdiag_[i] * lambda + Vector6d::Constant(1e-12 * (1.0 + hdiag_[i].sum()));
     dc_[i].setZero();
   }
   const bool schur = O_.use_schur && ncf > 0;
@@ -119,11 +120,13 @@ void SubspaceGn::solveStep(double lambda) {
         const int cs = slot_cam_[s];
         const Matrix23d Z = Wjp_[s] * Hi;
         (*bt)[cs].noalias() += Jc_[s].transpose() * (Wjp_[s] * hg);
-        // Diagonal block: symmetric 2x2 M, the full 6x6 product (vectorizes better than a triangle).
+        // Diagonal block, with the observation's own H_cc = Jc^T w Jc folded in:
+        // Jc^T (w I - M) Jc, M symmetric 2x2; the full 6x6 product (vectorizes better than a triangle).
         {
-          const Eigen::Matrix2d M = Z * Wjp_[s].transpose();
+          Eigen::Matrix2d M = -(Z * Wjp_[s].transpose());
+          M.diagonal().array() += slot_w_[s];
           const Eigen::Matrix<double, 6, 2> L = Jc_[s].transpose() * M;
-          S->at(cs, cs).noalias() -= L * Jc_[s];
+          S->at(cs, cs).noalias() += L * Jc_[s];
         }
         for (int u = s + 1; u < s1; ++u) {
           const int cu = slot_cam_[u];

@@ -90,7 +90,11 @@ class SubspaceGn {
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
   int rejected_ = 0;
+  // Hcc_: the camera blocks H_cc; with use_schur only the part from observations of fixed
+  // points (the rest enters S through the Schur diagonal blocks). hdiag_: diagonal of the whole
+  // H_cc (LM damping).
   std::vector<Matrix6d> Hcc_, Hd_;
+  std::vector<Vector6d> hdiag_;
   BlockMatrix6 S_;
   std::vector<Vector6d> gc_, b_, dc_;
   std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, R_;
@@ -104,9 +108,10 @@ class SubspaceGn {
   // through the 2-dimensional residual space.
   std::vector<Matrix26d> Jc_;
   std::vector<Matrix23d> Wjp_;
+  std::vector<double> slot_w_;  // IRLS weight of the slot's observation
   std::vector<Eigen::Isometry3d> saved_cams_;
   std::vector<std::vector<Matrix6d>> Hcc_t_;  // per-thread camera blocks (upper triangle)
-  std::vector<std::vector<Vector6d>> gc_t_;
+  std::vector<std::vector<Vector6d>> gc_t_, hdiag_t_;
   std::vector<BlockMatrix6> S_t_;              // per-thread reduced camera system (threads > 1)
   std::vector<std::vector<Vector6d>> b_t_;
 };

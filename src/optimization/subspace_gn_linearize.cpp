@@ -82,6 +82,8 @@ void SubspaceGn::buildStructure() {
   q_.resize(npf);
   Jc_.resize(slot_cam_.size());
   Wjp_.resize(slot_cam_.size());
+  slot_w_.resize(slot_cam_.size());
+  hdiag_.resize(ncf);
   // Constant cost of the observations with nothing free.
   fixed_cost_ = 0.0;
   Eigen::Vector2d r;
@@ -141,15 +143,21 @@ struct ObsEval {
       (*g)(l) += jp0[l] * wr0 + jp1[l] * wr1;
     }
   }
-  // Camera rows: Hcc += w Jc^T Jc (upper triangle), gc += w Jc^T r; with Jc/Wjp, stores the
-  // camera rows and the weighted point rows (H_cp = Jc^T Wjp).
-  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* gc, Matrix26d* Jc, Matrix23d* Wjp) const {
+  // Camera rows: Hcc += w Jc^T Jc (upper triangle; with Hcc null only its diagonal, into
+  // hdiag), gc += w Jc^T r; with Jc/Wjp, stores the camera rows and the weighted point rows
+  // (H_cp = Jc^T Wjp).
+  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* hdiag, Vector6d* gc, Matrix26d* Jc,
+                        Matrix23d* Wjp) const {
     const double jc0[6] = {A, 0.0, B, B * y, A * z - B * x, -A * y};
     const double jc1[6] = {0.0, C, D, D * y - C * z, -D * x, C * x};
     const double wr0 = w * r0, wr1 = w * r1;
     for (int l = 0; l < 6; ++l) {
       const double a0 = w * jc0[l], a1 = w * jc1[l];
-      for (int k = 0; k <= l; ++k) (*Hcc)(k, l) += a0 * jc0[k] + a1 * jc1[k];
+      if (Hcc) {
+        for (int k = 0; k <= l; ++k) (*Hcc)(k, l) += a0 * jc0[k] + a1 * jc1[k];
+      } else {
+        (*hdiag)(l) += a0 * jc0[l] + a1 * jc1[l];
+      }
       (*gc)(l) += jc0[l] * wr0 + jc1[l] * wr1;
     }
     if (Jc) {
@@ -178,17 +186,25 @@ double SubspaceGn::linearize() {
   const int npf = freePoints();
   cacheCameras();
   const int T = std::max(1, O_.threads);
+  // With use_schur the observations of free points enter the camera blocks only through the
+  // Schur complement's diagonal blocks, Jc^T (w I - M) Jc (solveStep): here only the diagonal
+  // of their H_cc (for the damping) is summed. Free cameras' observations of fixed points
+  // give full H_cc blocks.
+  const bool schur = O_.use_schur;
   Hcc_t_.resize(T);
   gc_t_.resize(T);
+  hdiag_t_.resize(T);
   for (int t = 0; t < T; ++t) {
-    Hcc_t_[t].assign(ncf, Matrix6d::Zero());
+    if (!schur) Hcc_t_[t].assign(ncf, Matrix6d::Zero());
     gc_t_[t].assign(ncf, Vector6d::Zero());
+    hdiag_t_[t].assign(ncf, Vector6d::Zero());
   }
   std::vector<double> cost_t(T, 0.0);
   parallelFor(npf, T, [&](int begin, int end, int t) {
     double cost = 0.0;
     std::vector<Matrix6d>& Hcc = Hcc_t_[t];
     std::vector<Vector6d>& gc = gc_t_[t];
+    std::vector<Vector6d>& hdiag = hdiag_t_[t];
     for (int j = begin; j < end; ++j) {
       Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
@@ -202,6 +218,7 @@ double SubspaceGn::linearize() {
           if (s >= 0) {
             Jc_[s].setZero();
             Wjp_[s].setZero();
+            slot_w_[s] = 0.0;
           }
           continue;
         }
@@ -211,7 +228,8 @@ double SubspaceGn::linearize() {
         e.addPoint(w, &H, &g);
         if (s >= 0) {
           const int ci = slot_cam_[s];
-          e.addCamera(w, &Hcc[ci], &gc[ci], &Jc_[s], &Wjp_[s]);
+          slot_w_[s] = w;
+          e.addCamera(w, schur ? nullptr : &Hcc[ci], &hdiag[ci], &gc[ci], &Jc_[s], &Wjp_[s]);
         }
       }
       mirrorUpper<3>(&H);
@@ -223,11 +241,13 @@ double SubspaceGn::linearize() {
   double cost = 0.0;
   for (int t = 0; t < T; ++t) cost += cost_t[t];
   for (int i = 0; i < ncf; ++i) {
-    Hcc_[i] = Hcc_t_[0][i];
+    Hcc_[i] = schur ? Matrix6d::Zero() : Hcc_t_[0][i];
     gc_[i] = gc_t_[0][i];
+    hdiag_[i] = hdiag_t_[0][i];
     for (int t = 1; t < T; ++t) {
-      Hcc_[i] += Hcc_t_[t][i];
+      if (!schur) Hcc_[i] += Hcc_t_[t][i];
       gc_[i] += gc_t_[t][i];
+      hdiag_[i] += hdiag_t_[t][i];
     }
   }
   // Free cameras observing fixed points.
@@ -240,9 +260,14 @@ double SubspaceGn::linearize() {
       continue;
     }
     cost += e.rho(kernel_.sigma2);
-    e.addCamera(e.weight(kernel_.sigma2), &Hcc_[ci], &gc_[ci], nullptr, nullptr);
+    e.addCamera(e.weight(kernel_.sigma2), &Hcc_[ci], nullptr, &gc_[ci], nullptr, nullptr);
   }
-  for (int i = 0; i < ncf; ++i) mirrorUpper<6>(&Hcc_[i]);
+  for (int i = 0; i < ncf; ++i) {
+    mirrorUpper<6>(&Hcc_[i]);
+    // Diagonal of the whole H_cc (the Schur path's slot part plus the full blocks).
+    if (schur) hdiag_[i] += Hcc_[i].diagonal();
+    else hdiag_[i] = Hcc_[i].diagonal();
+  }
   return cost;
 }
 
