@@ -49,6 +49,9 @@ class SubspaceGn {
   int activeObservations() const { return static_cast<int>(pt_obs_.size() + cam_only_obs_.size()); }
   // Runs the sweeps; returns {sweeps, converged, lambda}.
   void run(int* sweeps, bool* converged, double* lambda_out);
+  // Cost of all observations before run() changed anything: the constant part (observations
+  // with nothing free, summed in buildStructure) plus the first linearization's active cost.
+  double initialCost() const { return fixed_cost_ + initial_active_cost_; }
 
  private:
   void buildStructure();
@@ -89,6 +92,7 @@ class SubspaceGn {
   std::vector<Eigen::Vector2d> obs_uv_;
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
+  double initial_active_cost_ = 0.0;
   int rejected_ = 0;
   // Hcc_: the camera blocks H_cc; with use_schur only the part from observations of fixed
   // points (the rest enters S through the Schur diagonal blocks). hdiag_: diagonal of the whole
