@@ -201,20 +201,28 @@ double SubspaceGn::linearize() {
   }
   std::vector<double> cost_t(T, 0.0);
   parallelFor(npf, T, [&](int begin, int end, int t) {
+    // Written in scalars (accumulators in registers, the rows stored straight into Jc_/Wjp_):
+    // the same formulas as ObsEval, which the compiler kept spilling to the stack here.
+    const double fx = K_.fx, fy = K_.fy, cx = K_.cx, cy = K_.cy, s2 = kernel_.sigma2;
     double cost = 0.0;
-    std::vector<Matrix6d>& Hcc = Hcc_t_[t];
-    std::vector<Vector6d>& gc = gc_t_[t];
-    std::vector<Vector6d>& hdiag = hdiag_t_[t];
+    Matrix6d* Hcc = schur ? nullptr : Hcc_t_[t].data();
+    Vector6d* gc = gc_t_[t].data();
+    Vector6d* hdiag = hdiag_t_[t].data();
     for (int j = begin; j < end; ++j) {
-      Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d g = Eigen::Vector3d::Zero();
-      const Eigen::Vector3d p = P_.points[pts_[j]].p_w;
+      double h00 = 0.0, h01 = 0.0, h02 = 0.0, h11 = 0.0, h12 = 0.0, h22 = 0.0, g0 = 0.0, g1 = 0.0, g2 = 0.0;
+      const Eigen::Vector3d& pw = P_.points[pts_[j]].p_w;
+      const double px = pw.x(), py = pw.y(), pz = pw.z();
       for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
         const int c = obs_cam_[a];
         const int s = obs_slot_[a];
-        ObsEval e;
-        if (!e.residual(K_, kernel_.sigma2, R_[c], t_[c], p, obs_uv_[a])) {
-          cost += kernel_.sigma2;
+        const double* m = R_[c].data();
+        const double* tc = t_[c].data();
+        const double d0 = px - tc[0], d1 = py - tc[1], d2 = pz - tc[2];
+        const double x = m[0] * d0 + m[1] * d1 + m[2] * d2;
+        const double y = m[3] * d0 + m[4] * d1 + m[5] * d2;
+        const double z = m[6] * d0 + m[7] * d1 + m[8] * d2;
+        if (z <= kMinDepth) {
+          cost += s2;
           if (s >= 0) {
             Jc_[s].setZero();
             Wjp_[s].setZero();
@@ -222,19 +230,68 @@ double SubspaceGn::linearize() {
           }
           continue;
         }
-        cost += e.rho(kernel_.sigma2);
-        const double w = e.weight(kernel_.sigma2);
-        e.pointJacobian(R_[c]);
-        e.addPoint(w, &H, &g);
-        if (s >= 0) {
-          const int ci = slot_cam_[s];
-          slot_w_[s] = w;
-          e.addCamera(w, schur ? nullptr : &Hcc[ci], &hdiag[ci], &gc[ci], &Jc_[s], &Wjp_[s]);
+        const double iz = 1.0 / z;
+        const double A = fx * iz, C = fy * iz;
+        const double r0 = obs_uv_[a].x() - (A * x + cx);
+        const double r1 = obs_uv_[a].y() - (C * y + cy);
+        const double sq = r0 * r0 + r1 * r1;
+        const double inv = 1.0 / (s2 + sq);
+        cost += s2 * sq * inv;
+        const double w = s2 * s2 * inv * inv;
+        const double B = -A * x * iz, D = -C * y * iz;
+        // d r / d p_w rows, and the same scaled by w.
+        const double p00 = -(A * m[0] + B * m[6]), p01 = -(A * m[1] + B * m[7]), p02 = -(A * m[2] + B * m[8]);
+        const double p10 = -(C * m[3] + D * m[6]), p11 = -(C * m[4] + D * m[7]), p12 = -(C * m[5] + D * m[8]);
+        const double w00 = w * p00, w01 = w * p01, w02 = w * p02, w10 = w * p10, w11 = w * p11, w12 = w * p12;
+        h00 += w00 * p00 + w10 * p10;
+        h01 += w00 * p01 + w10 * p11;
+        h02 += w00 * p02 + w10 * p12;
+        h11 += w01 * p01 + w11 * p11;
+        h12 += w01 * p02 + w11 * p12;
+        h22 += w02 * p02 + w12 * p12;
+        const double wr0 = w * r0, wr1 = w * r1;
+        g0 += p00 * wr0 + p10 * wr1;
+        g1 += p01 * wr0 + p11 * wr1;
+        g2 += p02 * wr0 + p12 * wr1;
+        if (s < 0) continue;
+        const int ci = slot_cam_[s];
+        // d r / d camera rows (right perturbation), column-major 2x6: J[2l] row 0, J[2l+1] row 1.
+        double* J = Jc_[s].data();
+        J[0] = A;
+        J[1] = 0.0;
+        J[2] = 0.0;
+        J[3] = C;
+        J[4] = B;
+        J[5] = D;
+        J[6] = B * y;
+        J[7] = D * y - C * z;
+        J[8] = A * z - B * x;
+        J[9] = -D * x;
+        J[10] = -A * y;
+        J[11] = C * x;
+        double* W = Wjp_[s].data();
+        W[0] = w00;
+        W[1] = w10;
+        W[2] = w01;
+        W[3] = w11;
+        W[4] = w02;
+        W[5] = w12;
+        slot_w_[s] = w;
+        double* G = gc[ci].data();
+        double* Hd = hdiag[ci].data();
+        for (int l = 0; l < 6; ++l) {
+          G[l] += J[2 * l] * wr0 + J[2 * l + 1] * wr1;
+          Hd[l] += w * (J[2 * l] * J[2 * l] + J[2 * l + 1] * J[2 * l + 1]);
+        }
+        if (Hcc) {
+          Matrix6d& Hc = Hcc[ci];
+          for (int l = 0; l < 6; ++l)
+            for (int k = 0; k <= l; ++k) Hc(k, l) += w * (J[2 * k] * J[2 * l] + J[2 * k + 1] * J[2 * l + 1]);
         }
       }
-      mirrorUpper<3>(&H);
-      Hpp_[j] = H;
-      gp_[j] = g;
+      Eigen::Matrix3d& H = Hpp_[j];
+      H << h00, h01, h02, h01, h11, h12, h02, h12, h22;
+      gp_[j] = Eigen::Vector3d(g0, g1, g2);
     }
     cost_t[t] = cost;
   });
