@@ -328,22 +328,72 @@ double SubspaceGn::linearize() {
   return cost;
 }
 
-double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) const {
+double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& xw, Eigen::Matrix3d* H, Eigen::Vector3d* g) const {
+  // Scalars, as in linearize(); the cost-only loop is the refinement's line search.
+  const double fx = K_.fx, fy = K_.fy, cx = K_.cx, cy = K_.cy, s2 = kernel_.sigma2;
+  const double px = xw.x(), py = xw.y(), pz = xw.z();
+  const int a0 = pt_begin_[j], a1 = pt_begin_[j + 1];
   double c = 0.0;
-  if (H) H->setZero(), g->setZero();
-  for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
+  if (!H) {
+    for (int a = a0; a < a1; ++a) {
+      const int cam = obs_cam_[a];
+      const double* m = R_[cam].data();
+      const double* tc = t_[cam].data();
+      const double d0 = px - tc[0], d1 = py - tc[1], d2 = pz - tc[2];
+      const double z = m[6] * d0 + m[7] * d1 + m[8] * d2;
+      if (z <= kMinDepth) {
+        c += s2;
+        continue;
+      }
+      const double x = m[0] * d0 + m[1] * d1 + m[2] * d2;
+      const double y = m[3] * d0 + m[4] * d1 + m[5] * d2;
+      const double iz = 1.0 / z;
+      const double A = fx * iz, C = fy * iz;
+      const double r0 = obs_uv_[a].x() - (A * x + cx);
+      const double r1 = obs_uv_[a].y() - (C * y + cy);
+      const double sq = r0 * r0 + r1 * r1;
+      c += s2 * sq * (1.0 / (s2 + sq));
+    }
+    return c;
+  }
+  double h00 = 0.0, h01 = 0.0, h02 = 0.0, h11 = 0.0, h12 = 0.0, h22 = 0.0, g0 = 0.0, g1 = 0.0, g2 = 0.0;
+  for (int a = a0; a < a1; ++a) {
     const int cam = obs_cam_[a];
-    ObsEval e;
-    if (!e.residual(K_, kernel_.sigma2, R_[cam], t_[cam], x, obs_uv_[a])) {
-      c += kernel_.sigma2;
+    const double* m = R_[cam].data();
+    const double* tc = t_[cam].data();
+    const double d0 = px - tc[0], d1 = py - tc[1], d2 = pz - tc[2];
+    const double z = m[6] * d0 + m[7] * d1 + m[8] * d2;
+    if (z <= kMinDepth) {
+      c += s2;
       continue;
     }
-    c += e.rho(kernel_.sigma2);
-    if (!H) continue;
-    e.pointJacobian(R_[cam]);
-    e.addPoint(e.weight(kernel_.sigma2), H, g);
+    const double x = m[0] * d0 + m[1] * d1 + m[2] * d2;
+    const double y = m[3] * d0 + m[4] * d1 + m[5] * d2;
+    const double iz = 1.0 / z;
+    const double A = fx * iz, C = fy * iz;
+    const double r0 = obs_uv_[a].x() - (A * x + cx);
+    const double r1 = obs_uv_[a].y() - (C * y + cy);
+    const double sq = r0 * r0 + r1 * r1;
+    const double inv = 1.0 / (s2 + sq);
+    c += s2 * sq * inv;
+    const double w = s2 * s2 * inv * inv;
+    const double B = -A * x * iz, D = -C * y * iz;
+    const double p00 = -(A * m[0] + B * m[6]), p01 = -(A * m[1] + B * m[7]), p02 = -(A * m[2] + B * m[8]);
+    const double p10 = -(C * m[3] + D * m[6]), p11 = -(C * m[4] + D * m[7]), p12 = -(C * m[5] + D * m[8]);
+    const double w00 = w * p00, w01 = w * p01, w02 = w * p02, w10 = w * p10, w11 = w * p11, w12 = w * p12;
+    h00 += w00 * p00 + w10 * p10;
+    h01 += w00 * p01 + w10 * p11;
+    h02 += w00 * p02 + w10 * p12;
+    h11 += w01 * p01 + w11 * p11;
+    h12 += w01 * p02 + w11 * p12;
+    h22 += w02 * p02 + w12 * p12;
+    const double wr0 = w * r0, wr1 = w * r1;
+    g0 += p00 * wr0 + p10 * wr1;
+    g1 += p01 * wr0 + p11 * wr1;
+    g2 += p02 * wr0 + p12 * wr1;
   }
-  if (H) mirrorUpper<3>(H);
+  *H << h00, h01, h02, h01, h11, h12, h02, h12, h22;
+  *g = Eigen::Vector3d(g0, g1, g2);
   return c;
 }
 
