@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <thread>
 #include <vector>
 
@@ -102,6 +103,10 @@ class SubspaceGn {
   BlockMatrix6 S_;
   std::vector<Vector6d> gc_, b_, dc_;
   std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, R_;
+  // Per camera, 12 doubles laid out for 2-wide arithmetic on the two residual rows: the first
+  // two columns of R_w_c interleaved, (R00, R01, R10, R11, R20, R21), then its third column
+  // (R02, R12, R22) and t_w_c. Row k of [x y]^T = R^T d is then one packed product per d_k.
+  std::vector<std::array<double, 12>> cam_pack_;
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
   std::vector<Eigen::Matrix3d> ref_H_;  // activeCost's per-point blocks for refinePoints
   std::vector<Eigen::Vector3d> ref_g_;
