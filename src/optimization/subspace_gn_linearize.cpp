@@ -201,26 +201,27 @@ double SubspaceGn::linearize() {
   }
   std::vector<double> cost_t(T, 0.0);
   parallelFor(npf, T, [&](int begin, int end, int t) {
-    // Written in scalars (accumulators in registers, the rows stored straight into Jc_/Wjp_):
-    // the same formulas as ObsEval, which the compiler kept spilling to the stack here.
-    const double fx = K_.fx, fy = K_.fy, cx = K_.cx, cy = K_.cy, s2 = kernel_.sigma2;
+    // The two residual rows side by side in 2-wide arrays (as evalPoint; SSE2 on x86-64), the
+    // per-point accumulators summed once per point, the rows stored straight into Jc_/Wjp_.
+    using A2 = Eigen::Array2d;
+    using C2 = Eigen::Map<const A2>;
+    using V2 = Eigen::Map<A2>;
+    const double s2 = kernel_.sigma2;
+    const A2 fxy(K_.fx, K_.fy), cxy(K_.cx, K_.cy);
     double cost = 0.0;
     Matrix6d* Hcc = schur ? nullptr : Hcc_t_[t].data();
     Vector6d* gc = gc_t_[t].data();
     Vector6d* hdiag = hdiag_t_[t].data();
     for (int j = begin; j < end; ++j) {
-      double h00 = 0.0, h01 = 0.0, h02 = 0.0, h11 = 0.0, h12 = 0.0, h22 = 0.0, g0 = 0.0, g1 = 0.0, g2 = 0.0;
+      A2 H00 = A2::Zero(), H01 = A2::Zero(), H02 = A2::Zero(), H11 = A2::Zero(), H12 = A2::Zero(), H22 = A2::Zero();
+      A2 G0 = A2::Zero(), G1 = A2::Zero(), G2 = A2::Zero();
       const Eigen::Vector3d& pw = P_.points[pts_[j]].p_w;
       const double px = pw.x(), py = pw.y(), pz = pw.z();
       for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
-        const int c = obs_cam_[a];
         const int s = obs_slot_[a];
-        const double* m = R_[c].data();
-        const double* tc = t_[c].data();
-        const double d0 = px - tc[0], d1 = py - tc[1], d2 = pz - tc[2];
-        const double x = m[0] * d0 + m[1] * d1 + m[2] * d2;
-        const double y = m[3] * d0 + m[4] * d1 + m[5] * d2;
-        const double z = m[6] * d0 + m[7] * d1 + m[8] * d2;
+        const double* q = cam_pack_[obs_cam_[a]].data();
+        const double d0 = px - q[9], d1 = py - q[10], d2 = pz - q[11];
+        const double z = q[6] * d0 + q[7] * d1 + q[8] * d2;
         if (z <= kMinDepth) {
           cost += s2;
           if (s >= 0) {
@@ -230,32 +231,34 @@ double SubspaceGn::linearize() {
           }
           continue;
         }
+        const A2 xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
         const double iz = 1.0 / z;
-        const double A = fx * iz, C = fy * iz;
-        const double r0 = obs_uv_[a].x() - (A * x + cx);
-        const double r1 = obs_uv_[a].y() - (C * y + cy);
-        const double sq = r0 * r0 + r1 * r1;
+        const A2 AC = fxy * iz;  // (A, C): the pinhole Jacobian is [A 0 B; 0 C D]
+        const A2 r = C2(obs_uv_[a].data()) - (AC * xy + cxy);
+        const double sq = r(0) * r(0) + r(1) * r(1);
         const double inv = 1.0 / (s2 + sq);
         cost += s2 * sq * inv;
         const double w = s2 * s2 * inv * inv;
-        const double B = -A * x * iz, D = -C * y * iz;
-        // d r / d p_w rows, and the same scaled by w.
-        const double p00 = -(A * m[0] + B * m[6]), p01 = -(A * m[1] + B * m[7]), p02 = -(A * m[2] + B * m[8]);
-        const double p10 = -(C * m[3] + D * m[6]), p11 = -(C * m[4] + D * m[7]), p12 = -(C * m[5] + D * m[8]);
-        const double w00 = w * p00, w01 = w * p01, w02 = w * p02, w10 = w * p10, w11 = w * p11, w12 = w * p12;
-        h00 += w00 * p00 + w10 * p10;
-        h01 += w00 * p01 + w10 * p11;
-        h02 += w00 * p02 + w10 * p12;
-        h11 += w01 * p01 + w11 * p11;
-        h12 += w01 * p02 + w11 * p12;
-        h22 += w02 * p02 + w12 * p12;
-        const double wr0 = w * r0, wr1 = w * r1;
-        g0 += p00 * wr0 + p10 * wr1;
-        g1 += p01 * wr0 + p11 * wr1;
-        g2 += p02 * wr0 + p12 * wr1;
+        const A2 BD = -AC * xy * iz;
+        // Columns of d r / d p_w, (row 0, row 1) each, and the same scaled by w.
+        const A2 j0 = -(AC * C2(q) + BD * q[6]);
+        const A2 j1 = -(AC * C2(q + 2) + BD * q[7]);
+        const A2 j2 = -(AC * C2(q + 4) + BD * q[8]);
+        const A2 wj0 = w * j0, wj1 = w * j1, wj2 = w * j2;
+        H00 += wj0 * j0;
+        H01 += wj0 * j1;
+        H02 += wj0 * j2;
+        H11 += wj1 * j1;
+        H12 += wj1 * j2;
+        H22 += wj2 * j2;
+        const A2 wr = w * r;
+        G0 += j0 * wr;
+        G1 += j1 * wr;
+        G2 += j2 * wr;
         if (s < 0) continue;
         const int ci = slot_cam_[s];
-        // d r / d camera rows (right perturbation), column-major 2x6: J[2l] row 0, J[2l+1] row 1.
+        // Columns of d r / d camera (right perturbation), column-major 2x6: column l at J + 2l.
+        const double A = AC(0), C = AC(1), B = BD(0), D = BD(1), x = xy(0), y = xy(1);
         double* J = Jc_[s].data();
         J[0] = A;
         J[1] = 0.0;
@@ -270,18 +273,16 @@ double SubspaceGn::linearize() {
         J[10] = -A * y;
         J[11] = C * x;
         double* W = Wjp_[s].data();
-        W[0] = w00;
-        W[1] = w10;
-        W[2] = w01;
-        W[3] = w11;
-        W[4] = w02;
-        W[5] = w12;
+        V2(W + 0) = wj0;
+        V2(W + 2) = wj1;
+        V2(W + 4) = wj2;
         slot_w_[s] = w;
         double* G = gc[ci].data();
         double* Hd = hdiag[ci].data();
         for (int l = 0; l < 6; ++l) {
-          G[l] += J[2 * l] * wr0 + J[2 * l + 1] * wr1;
-          Hd[l] += w * (J[2 * l] * J[2 * l] + J[2 * l + 1] * J[2 * l + 1]);
+          const A2 col = C2(J + 2 * l);
+          G[l] += (col * wr).sum();
+          Hd[l] += w * (col * col).sum();
         }
         if (Hcc) {
           Matrix6d& Hc = Hcc[ci];
@@ -289,9 +290,9 @@ double SubspaceGn::linearize() {
             for (int k = 0; k <= l; ++k) Hc(k, l) += w * (J[2 * k] * J[2 * l] + J[2 * k + 1] * J[2 * l + 1]);
         }
       }
-      Eigen::Matrix3d& H = Hpp_[j];
-      H << h00, h01, h02, h01, h11, h12, h02, h12, h22;
-      gp_[j] = Eigen::Vector3d(g0, g1, g2);
+      const double h00 = H00.sum(), h01 = H01.sum(), h02 = H02.sum(), h11 = H11.sum(), h12 = H12.sum(), h22 = H22.sum();
+      Hpp_[j] << h00, h01, h02, h01, h11, h12, h02, h12, h22;
+      gp_[j] = Eigen::Vector3d(G0.sum(), G1.sum(), G2.sum());
     }
     cost_t[t] = cost;
   });
@@ -334,33 +335,27 @@ double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& xw, Eigen::Matrix3d* 
   const double px = xw.x(), py = xw.y(), pz = xw.z();
   const int a0 = pt_begin_[j], a1 = pt_begin_[j + 1];
   double c = 0.0;
+  using A2 = Eigen::Array2d;
+  using C2 = Eigen::Map<const A2>;
+  const A2 fxy(fx, fy), cxy(cx, cy);
   if (!H) {
     for (int a = a0; a < a1; ++a) {
-      const int cam = obs_cam_[a];
-      const double* m = R_[cam].data();
-      const double* tc = t_[cam].data();
-      const double d0 = px - tc[0], d1 = py - tc[1], d2 = pz - tc[2];
-      const double z = m[6] * d0 + m[7] * d1 + m[8] * d2;
+      const double* q = cam_pack_[obs_cam_[a]].data();
+      const double d0 = px - q[9], d1 = py - q[10], d2 = pz - q[11];
+      const double z = q[6] * d0 + q[7] * d1 + q[8] * d2;
       if (z <= kMinDepth) {
         c += s2;
         continue;
       }
-      const double x = m[0] * d0 + m[1] * d1 + m[2] * d2;
-      const double y = m[3] * d0 + m[4] * d1 + m[5] * d2;
-      const double iz = 1.0 / z;
-      const double A = fx * iz, C = fy * iz;
-      const double r0 = obs_uv_[a].x() - (A * x + cx);
-      const double r1 = obs_uv_[a].y() - (C * y + cy);
-      const double sq = r0 * r0 + r1 * r1;
+      const A2 xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
+      const A2 r = C2(obs_uv_[a].data()) - (fxy * (1.0 / z) * xy + cxy);
+      const double sq = r(0) * r(0) + r(1) * r(1);
       c += s2 * sq * (1.0 / (s2 + sq));
     }
     return c;
   }
   // The two residual rows side by side in 2-wide arrays (SSE2 on x86-64): the accumulators
   // hold the rows' terms separately and are summed once per point.
-  using A2 = Eigen::Array2d;
-  using C2 = Eigen::Map<const A2>;
-  const A2 fxy(fx, fy), cxy(cx, cy);
   A2 H00 = A2::Zero(), H01 = A2::Zero(), H02 = A2::Zero(), H11 = A2::Zero(), H12 = A2::Zero(), H22 = A2::Zero();
   A2 G0 = A2::Zero(), G1 = A2::Zero(), G2 = A2::Zero();
   for (int a = a0; a < a1; ++a) {
