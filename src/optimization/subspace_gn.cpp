@@ -215,6 +215,30 @@ void SubspaceGn::pointUpdates() {
 
 }  // namespace detail
 
+namespace detail {
+
+double SubspaceGn::finish(std::vector<double>* residual_px) const {
+  // The formulas of baCost and baResidualNorms; the constant part is buildStructure's.
+  residual_px->resize(P_.observations.size());
+  double cost = fixed_cost_;
+  Eigen::Vector2d r;
+  for (size_t k = 0; k < P_.observations.size(); ++k) {
+    if (fixed_norm_[k] >= 0.0) {
+      (*residual_px)[k] = fixed_norm_[k];
+    } else if (baResidual(P_, P_.observations[k], &r)) {
+      const double s = r.squaredNorm();
+      cost += kernel_.rho(s);
+      (*residual_px)[k] = std::sqrt(s);
+    } else {
+      cost += kernel_.sigma2;
+      (*residual_px)[k] = std::numeric_limits<double>::infinity();
+    }
+  }
+  return cost;
+}
+
+}  // namespace detail
+
 BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options) {
   options.validate();
   problem.validate();
@@ -231,21 +255,7 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   summary.initial_cost = solver.initialCost();
   summary.rejected_steps = solver.rejectedSteps();
   summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  // baCost and baResidualNorms in one pass (the same per-observation formulas).
-  const geometry::GemanMcClure kernel(options.robust_sigma_px);
-  summary.residual_px.resize(problem.observations.size());
-  double final_cost = 0.0;
-  Eigen::Vector2d r;
-  for (size_t k = 0; k < problem.observations.size(); ++k) {
-    if (baResidual(problem, problem.observations[k], &r)) {
-      const double s = r.squaredNorm();
-      final_cost += kernel.rho(s);
-      summary.residual_px[k] = std::sqrt(s);
-    } else {
-      final_cost += kernel.sigma2;
-      summary.residual_px[k] = std::numeric_limits<double>::infinity();
-    }
-  }
+  const double final_cost = solver.finish(&summary.residual_px);
   summary.final_cost = final_cost;
   return summary;
 }

@@ -53,6 +53,9 @@ class SubspaceGn {
   // Cost of all observations before run() changed anything: the constant part (observations
   // with nothing free, summed in buildStructure) plus the first linearization's active cost.
   double initialCost() const { return fixed_cost_ + initial_active_cost_; }
+  // After run(): every observation's residual norm (baResidualNorms) and the final cost
+  // (baCost), evaluating only the observations that touch a free variable.
+  double finish(std::vector<double>* residual_px) const;
 
  private:
   void buildStructure();
@@ -93,6 +96,7 @@ class SubspaceGn {
   std::vector<Eigen::Vector2d> obs_uv_;
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
+  std::vector<double> fixed_norm_;  // residual norm of each observation with nothing free, else -1
   double initial_active_cost_ = 0.0;
   int rejected_ = 0;
   // Hcc_: the camera blocks H_cc; with use_schur only the part from observations of fixed

@@ -1,5 +1,6 @@
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 
 #include "subspace_gn_impl.h"
 
@@ -85,11 +86,22 @@ void SubspaceGn::buildStructure() {
   slot_w_.resize(slot_cam_.size());
   hdiag_.resize(ncf);
   // Constant cost of the observations with nothing free.
+  // Their residual norms do not change either: kept for finish().
   fixed_cost_ = 0.0;
+  fixed_norm_.assign(P_.observations.size(), -1.0);
   Eigen::Vector2d r;
-  for (const BaObservation& o : P_.observations)
-    if (cam_var_[o.camera] < 0 && pt_var_[o.point] < 0)
-      fixed_cost_ += baResidual(P_, o, &r) ? kernel_.rho(r.squaredNorm()) : kernel_.sigma2;
+  for (size_t k = 0; k < P_.observations.size(); ++k) {
+    const BaObservation& o = P_.observations[k];
+    if (cam_var_[o.camera] >= 0 || pt_var_[o.point] >= 0) continue;
+    if (baResidual(P_, o, &r)) {
+      const double s = r.squaredNorm();
+      fixed_cost_ += kernel_.rho(s);
+      fixed_norm_[k] = std::sqrt(s);
+    } else {
+      fixed_cost_ += kernel_.sigma2;
+      fixed_norm_[k] = std::numeric_limits<double>::infinity();
+    }
+  }
 }
 
 namespace {
