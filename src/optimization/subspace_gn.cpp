@@ -28,6 +28,20 @@ void BaOptions::validate() const {
 
 namespace detail {
 
+namespace {
+
+// S += Jl^T M Jr for two camera-row pairs (2x6, column-major). Column 0 of a camera row pair
+// is (A, 0) and column 1 is (0, C) (pinhole Jacobian times [I | -[p_c]x]; all zero behind the
+// camera), so those two columns of the product take one term.
+inline void addRank2(Matrix6d* S, const Matrix26d& Jl, const Eigen::Matrix2d& M, const Matrix26d& Jr) {
+  const Eigen::Matrix<double, 6, 2> L = Jl.transpose() * M;
+  S->col(0) += L.col(0) * Jr(0, 0);
+  S->col(1) += L.col(1) * Jr(1, 1);
+  for (int c = 2; c < 6; ++c) S->col(c) += L.col(0) * Jr(0, c) + L.col(1) * Jr(1, c);
+}
+
+}  // namespace
+
 SubspaceGn::SubspaceGn(BaProblem& p, const BaOptions& o) : P_(p), O_(o), kernel_(o.robust_sigma_px) {
   K_.fx = p.fx;
   K_.fy = p.fy;
@@ -127,20 +141,18 @@ void SubspaceGn::solveStep(double lambda) {
         {
           Eigen::Matrix2d M = -(Z * Wjp_[s].transpose());
           M.diagonal().array() += slot_w_[s];
-          const Eigen::Matrix<double, 6, 2> L = Jc_[s].transpose() * M;
-          S->at(cs, cs).noalias() += L * Jc_[s];
+          addRank2(&S->at(cs, cs), Jc_[s], M, Jc_[s]);
         }
         for (int u = s + 1; u < s1; ++u) {
           const int cu = slot_cam_[u];
-          const Eigen::Matrix2d M = Z * Wjp_[u].transpose();  // M_su; M_us = M_su^T
+          const Eigen::Matrix2d M = -(Z * Wjp_[u].transpose());  // -M_su; M_us = M_su^T
           if (cs < cu) {
-            const Eigen::Matrix<double, 6, 2> L = Jc_[s].transpose() * M;
-            S->at(cs, cu).noalias() -= L * Jc_[u];
+            addRank2(&S->at(cs, cu), Jc_[s], M, Jc_[u]);
           } else {
             const Eigen::Matrix<double, 6, 2> L = Jc_[u].transpose() * M.transpose();
             Matrix6d X = L * Jc_[s];
             if (cs == cu) X += X.transpose().eval();  // two observations of a point in one camera
-            S->at(cu, cs) -= X;
+            S->at(cu, cs) += X;
           }
         }
       }
