@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "subspace_gn_impl.h"
@@ -27,6 +28,20 @@ void BaOptions::validate() const {
 
 namespace detail {
 
+namespace {
+
+// S += Jl^T M Jr for two camera-row pairs (2x6, column-major). Column 0 of a camera row pair
+// is (A, 0) and column 1 is (0, C) (pinhole Jacobian times [I | -[p_c]x]; all zero behind the
+// camera), so those two columns of the product take one term.
+inline void addRank2(Matrix6d* S, const Matrix26d& Jl, const Eigen::Matrix2d& M, const Matrix26d& Jr) {
+  const Eigen::Matrix<double, 6, 2> L = Jl.transpose() * M;
+  S->col(0) += L.col(0) * Jr(0, 0);
+  S->col(1) += L.col(1) * Jr(1, 1);
+  for (int c = 2; c < 6; ++c) S->col(c) += L.col(0) * Jr(0, c) + L.col(1) * Jr(1, c);
+}
+
+}  // namespace
+
 SubspaceGn::SubspaceGn(BaProblem& p, const BaOptions& o) : P_(p), O_(o), kernel_(o.robust_sigma_px) {
   K_.fx = p.fx;
   K_.fy = p.fy;
@@ -44,6 +59,7 @@ void SubspaceGn::run(int* sweeps, bool* converged, double* lambda_out) {
     return;
   }
   double cost = linearize();
+  initial_active_cost_ = cost;
   for (int sweep = 0; sweep < O_.max_sweeps; ++sweep) {
     ++*sweeps;
     bool accepted = false;
@@ -81,45 +97,83 @@ void SubspaceGn::run(int* sweeps, bool* converged, double* lambda_out) {
 void SubspaceGn::solveStep(double lambda) {
   const int ncf = freeCameras();
   const int npf = freePoints();
-  parallelFor(npf, O_.threads, [&](int begin, int end, int) {
+  Hd_.resize(ncf);
+  for (int i = 0; i < ncf; ++i) {
+    // Marquardt damping on the diagonal of the whole H_cc: + lambda diag(H_cc) + eps.
+    Hd_[i] = Hcc_[i];
+    Hd_[i].diagonal() += hdiag_[i] * lambda + Vector6d::Constant(1e-12 * (1.0 + hdiag_[i].sum()));
+    dc_[i].setZero();
+  }
+  const bool schur = O_.use_schur && ncf > 0;
+  // Eq. 11 with the points eliminated: the 6x6 blocks of the reduced camera system
+  // S_il = H_cc,i [i==l] - sum_j H_cp,ij H_pp,j^-1 H_pc,jl and b_i = -g_c,i + sum_j H_cp,ij H_pp,j^-1 g_p,j.
+  // With H_cp,ij = Jc_ij^T Wjp_ij (two residual rows), a point's term for the camera pair (i, l)
+  // is Jc_ij^T M Jc_lj with the 2x2 M = Wjp_ij H_pp,j^-1 Wjp_lj^T: accumulated point by point
+  // into the upper block triangle (per thread, then summed), then mirrored.
+  const int T = std::max(1, std::min(O_.threads, npf / 256));
+  if (schur) {
+    S_t_.resize(T);
+    b_t_.resize(T);
+    for (int t = 0; t < T; ++t) {
+      S_t_[t].resize(ncf);
+      b_t_[t].assign(ncf, Vector6d::Zero());
+    }
+  }
+  parallelFor(npf, O_.threads, [&](int begin, int end, int t) {
+    BlockMatrix6* S = schur ? &S_t_[t] : nullptr;
+    std::vector<Vector6d>* bt = schur ? &b_t_[t] : nullptr;
     for (int j = begin; j < end; ++j) {
       Eigen::Matrix3d H = Hpp_[j];
       H.diagonal() = H.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
-      Hpp_inv_[j] = H.inverse();
+      const Eigen::Matrix3d Hi = H.inverse();
+      Hpp_inv_[j] = Hi;
       q_[j].setZero();
       dp_[j].setZero();
-      if (O_.use_schur)
-        for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s) Y_[s].noalias() = Hcp_[s] * Hpp_inv_[j];
+      if (!schur) continue;
+      const Eigen::Vector3d hg = Hi * gp_[j];
+      const int s0 = slot_begin_[j], s1 = slot_begin_[j + 1];
+      for (int s = s0; s < s1; ++s) {
+        const int cs = slot_cam_[s];
+        const Matrix23d Z = Wjp_[s] * Hi;
+        (*bt)[cs].noalias() += Jc_[s].transpose() * (Wjp_[s] * hg);
+        // Diagonal block, with the observation's own H_cc = Jc^T w Jc folded in:
+        // Jc^T (w I - M) Jc, M symmetric 2x2; the full 6x6 product (vectorizes better than a triangle).
+        {
+          Eigen::Matrix2d M = -(Z * Wjp_[s].transpose());
+          M.diagonal().array() += slot_w_[s];
+          addRank2(&S->at(cs, cs), Jc_[s], M, Jc_[s]);
+        }
+        for (int u = s + 1; u < s1; ++u) {
+          const int cu = slot_cam_[u];
+          const Eigen::Matrix2d M = -(Z * Wjp_[u].transpose());  // -M_su; M_us = M_su^T
+          if (cs < cu) {
+            addRank2(&S->at(cs, cu), Jc_[s], M, Jc_[u]);
+          } else {
+            const Eigen::Matrix<double, 6, 2> L = Jc_[u].transpose() * M.transpose();
+            Matrix6d X = L * Jc_[s];
+            if (cs == cu) X += X.transpose().eval();  // two observations of a point in one camera
+            S->at(cu, cs) += X;
+          }
+        }
+      }
     }
   });
-  std::vector<Matrix6d> Hd(ncf);
-  for (int i = 0; i < ncf; ++i) {
-    Hd[i] = Hcc_[i];
-    Hd[i].diagonal() = Hd[i].diagonal() * (1.0 + lambda) + Vector6d::Constant(1e-12 * (1.0 + Hd[i].trace()));
-    dc_[i].setZero();
-  }
   if (ncf == 0) {
     pointUpdates();
     return;
   }
   if (O_.use_schur) {
-    // Eq. 11 with the points eliminated: the 6x6 blocks of the reduced camera system
-    // S_il = H_cc,i [i==l] - sum_j H_cp,ij H_pp,j^-1 H_pc,jl and b_i = -g_c,i + sum_j Y_ij g_p,j,
-    // accumulated row by row (rows are independent; the upper triangle, then mirrored).
     S_.resize(ncf);
-    parallelFor(ncf, O_.threads, [&](int begin, int end, int) {
-      for (int i = begin; i < end; ++i) {
-        S_.at(i, i) = Hd[i];
-        b_[i] = -gc_[i];
-        for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
-          const int s = cam_slots_[a];
-          const int j = slot_point_[s];
-          b_[i].noalias() += Y_[s] * gp_[j];
-          for (int t = slot_begin_[j]; t < slot_begin_[j + 1]; ++t)
-            if (slot_cam_[t] >= i) S_.at(i, slot_cam_[t]).noalias() -= Y_[s] * Hcp_[t].transpose();
-        }
+    for (int i = 0; i < ncf; ++i) {
+      b_[i] = -gc_[i];
+      for (int t = 0; t < T; ++t) b_[i] += b_t_[t][i];
+      for (int l = i; l < ncf; ++l) {
+        Matrix6d& Sil = S_.at(i, l);
+        Sil = S_t_[0].at(i, l);
+        for (int t = 1; t < T; ++t) Sil += S_t_[t].at(i, l);
       }
-    });
+      S_.at(i, i) += Hd_[i];
+    }
     for (int i = 0; i < ncf; ++i)
       for (int l = i + 1; l < ncf; ++l) S_.at(l, i) = S_.at(i, l).transpose();
     if (O_.camera_solver == BaOptions::CameraSolver::kConjugateGradient)
@@ -129,7 +183,7 @@ void SubspaceGn::solveStep(double lambda) {
     parallelFor(npf, O_.threads, [&](int begin, int end, int) {
       for (int j = begin; j < end; ++j)
         for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
-          q_[j].noalias() += Hcp_[s].transpose() * dc_[slot_cam_[s]];
+          q_[j].noalias() += Wjp_[s].transpose() * (Jc_[s] * dc_[slot_cam_[s]]);
     });
     pointUpdates();
     return;
@@ -137,14 +191,14 @@ void SubspaceGn::solveStep(double lambda) {
   // Plain Eq. 11 / Eq. 12 block Gauss-Seidel: camera blocks with the points' current
   // updates, then the point blocks with the cameras' updates, repeated.
   std::vector<Eigen::LDLT<Matrix6d>> solvers(ncf);
-  for (int i = 0; i < ncf; ++i) solvers[i].compute(Hd[i]);
+  for (int i = 0; i < ncf; ++i) solvers[i].compute(Hd_[i]);
   for (int pass = 0; pass < O_.plain_gs_passes; ++pass) {
     double max_change = 0.0, max_update = 0.0;
     for (int i = 0; i < ncf; ++i) {
       Vector6d rhs = -gc_[i];
       for (int a = cam_begin_[i]; a < cam_begin_[i + 1]; ++a) {
         const int s = cam_slots_[a];
-        rhs.noalias() -= Hcp_[s] * dp_[slot_point_[s]];
+        rhs.noalias() -= Jc_[s].transpose() * (Wjp_[s] * dp_[slot_point_[s]]);
       }
       const Vector6d d = solvers[i].solve(rhs);
       max_change = std::max(max_change, (d - dc_[i]).lpNorm<Eigen::Infinity>());
@@ -164,7 +218,7 @@ void SubspaceGn::pointUpdates() {
         rhs += q_[j];
       } else {
         for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
-          rhs.noalias() += Hcp_[s].transpose() * dc_[slot_cam_[s]];
+          rhs.noalias() += Wjp_[s].transpose() * (Jc_[s] * dc_[slot_cam_[s]]);
       }
       dp_[j].noalias() = -Hpp_inv_[j] * rhs;
     }
@@ -173,22 +227,48 @@ void SubspaceGn::pointUpdates() {
 
 }  // namespace detail
 
+namespace detail {
+
+double SubspaceGn::finish(std::vector<double>* residual_px) const {
+  // The formulas of baCost and baResidualNorms; the constant part is buildStructure's.
+  residual_px->resize(P_.observations.size());
+  double cost = fixed_cost_;
+  Eigen::Vector2d r;
+  for (size_t k = 0; k < P_.observations.size(); ++k) {
+    if (fixed_norm_[k] >= 0.0) {
+      (*residual_px)[k] = fixed_norm_[k];
+    } else if (baResidual(P_, P_.observations[k], &r)) {
+      const double s = r.squaredNorm();
+      cost += kernel_.rho(s);
+      (*residual_px)[k] = std::sqrt(s);
+    } else {
+      cost += kernel_.sigma2;
+      (*residual_px)[k] = std::numeric_limits<double>::infinity();
+    }
+  }
+  return cost;
+}
+
+}  // namespace detail
+
 BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options) {
   options.validate();
   problem.validate();
   BaSummary summary;
-  summary.initial_cost = baCost(problem, options.robust_sigma_px);
-  // time_ms covers setup and sweeps, not the reporting (initial/final cost, residuals).
+  // time_ms covers setup and sweeps, not the final reporting (final cost, residuals).
   const auto start = std::chrono::steady_clock::now();
   detail::SubspaceGn solver(problem, options);
   summary.free_cameras = solver.freeCameras();
   summary.free_points = solver.freePoints();
   summary.active_observations = solver.activeObservations();
   solver.run(&summary.sweeps, &summary.converged, &summary.final_lambda);
+  // The initial cost comes from the solver's own first pass (the constant part plus the first
+  // linearization) instead of another pass over every observation.
+  summary.initial_cost = solver.initialCost();
   summary.rejected_steps = solver.rejectedSteps();
   summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  summary.final_cost = baCost(problem, options.robust_sigma_px);
-  summary.residual_px = baResidualNorms(problem);
+  const double final_cost = solver.finish(&summary.residual_px);
+  summary.final_cost = final_cost;
   return summary;
 }
 

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <thread>
 #include <vector>
 
@@ -20,7 +21,8 @@ namespace detail {
 
 using geometry::Matrix6d;
 using geometry::Vector6d;
-using Matrix63d = Eigen::Matrix<double, 6, 3>;
+using Matrix26d = Eigen::Matrix<double, 2, 6>;
+using Matrix23d = Eigen::Matrix<double, 2, 3>;
 
 constexpr double kMinDepth = 1e-9;
 
@@ -48,6 +50,12 @@ class SubspaceGn {
   int activeObservations() const { return static_cast<int>(pt_obs_.size() + cam_only_obs_.size()); }
   // Runs the sweeps; returns {sweeps, converged, lambda}.
   void run(int* sweeps, bool* converged, double* lambda_out);
+  // Cost of all observations before run() changed anything: the constant part (observations
+  // with nothing free, summed in buildStructure) plus the first linearization's active cost.
+  double initialCost() const { return fixed_cost_ + initial_active_cost_; }
+  // After run(): every observation's residual norm (baResidualNorms) and the final cost
+  // (baCost), evaluating only the observations that touch a free variable.
+  double finish(std::vector<double>* residual_px) const;
 
  private:
   void buildStructure();
@@ -62,12 +70,18 @@ class SubspaceGn {
   // point's cost only involves its own observations, so every step is checked and kept per
   // point). Returns the total cost decrease.
   double refinePoints(int iterations);
+  // Robust cost of free point j's observations with the point at x (cameras as cached); with
+  // H and g, also the point's IRLS block and gradient there.
+  double evalPoint(int j, const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) const;
   // Eq. 12: dp_j = -H_pp^-1 (g_p + sum_i H_pc dc_i), independent per point.
   void pointUpdates();
   void cacheCameras();
   void saveState();
   void restoreState();
   void applyStep();
+  // Robust cost of the active part at the current estimate. With point_iterations > 0 it also
+  // keeps each free point's cost, 3x3 block and gradient (cameras fixed) at this estimate:
+  // when the step is accepted they are the first linearization of refinePoints.
   double activeCost();
 
   BaProblem& P_;
@@ -82,16 +96,37 @@ class SubspaceGn {
   std::vector<Eigen::Vector2d> obs_uv_;
   std::vector<int> slot_begin_, slot_cam_, slot_point_, cam_begin_, cam_slots_;
   double fixed_cost_ = 0.0;
+  std::vector<double> fixed_norm_;  // residual norm of each observation with nothing free, else -1
+  double initial_active_cost_ = 0.0;
   int rejected_ = 0;
-  std::vector<Matrix6d> Hcc_;
+  // Hcc_: the camera blocks H_cc; with use_schur only the part from observations of fixed
+  // points (the rest enters S through the Schur diagonal blocks). hdiag_: diagonal of the whole
+  // H_cc (LM damping).
+  std::vector<Matrix6d> Hcc_, Hd_;
+  std::vector<Vector6d> hdiag_;
   BlockMatrix6 S_;
   std::vector<Vector6d> gc_, b_, dc_;
   std::vector<Eigen::Matrix3d> Hpp_, Hpp_inv_, R_;
+  // Per camera, 12 doubles laid out for 2-wide arithmetic on the two residual rows: the first
+  // two columns of R_w_c interleaved, (R00, R01, R10, R11, R20, R21), then its third column
+  // (R02, R12, R22) and t_w_c. Row k of [x y]^T = R^T d is then one packed product per d_k.
+  std::vector<std::array<double, 12>> cam_pack_;
   std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
-  std::vector<Matrix63d> Hcp_, Y_;
+  std::vector<Eigen::Matrix3d> ref_H_;  // activeCost's per-point blocks for refinePoints
+  std::vector<Eigen::Vector3d> ref_g_;
+  std::vector<double> ref_c_;
+  // Per slot (free camera, free point): the two rows of d r / d camera and the two rows of
+  // d r / d point scaled by the IRLS weight, so that H_cp = Jc^T Wjp. Kept as rows (rank 2)
+  // instead of the 6x3 product: the Schur complement and the coupling products are cheaper
+  // through the 2-dimensional residual space.
+  std::vector<Matrix26d> Jc_;
+  std::vector<Matrix23d> Wjp_;
+  std::vector<double> slot_w_;  // IRLS weight of the slot's observation
   std::vector<Eigen::Isometry3d> saved_cams_;
   std::vector<std::vector<Matrix6d>> Hcc_t_;  // per-thread camera blocks (upper triangle)
-  std::vector<std::vector<Vector6d>> gc_t_;
+  std::vector<std::vector<Vector6d>> gc_t_, hdiag_t_;
+  std::vector<BlockMatrix6> S_t_;              // per-thread reduced camera system (threads > 1)
+  std::vector<std::vector<Vector6d>> b_t_;
 };
 
 }  // namespace detail

@@ -1,5 +1,6 @@
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 
 #include "subspace_gn_impl.h"
 
@@ -80,14 +81,27 @@ void SubspaceGn::buildStructure() {
   Hpp_inv_.resize(npf);
   dp_.resize(npf);
   q_.resize(npf);
-  Hcp_.resize(slot_cam_.size());
-  if (O_.use_schur) Y_.resize(slot_cam_.size());
+  Jc_.resize(slot_cam_.size());
+  Wjp_.resize(slot_cam_.size());
+  slot_w_.resize(slot_cam_.size());
+  hdiag_.resize(ncf);
   // Constant cost of the observations with nothing free.
+  // Their residual norms do not change either: kept for finish().
   fixed_cost_ = 0.0;
+  fixed_norm_.assign(P_.observations.size(), -1.0);
   Eigen::Vector2d r;
-  for (const BaObservation& o : P_.observations)
-    if (cam_var_[o.camera] < 0 && pt_var_[o.point] < 0)
-      fixed_cost_ += baResidual(P_, o, &r) ? kernel_.rho(r.squaredNorm()) : kernel_.sigma2;
+  for (size_t k = 0; k < P_.observations.size(); ++k) {
+    const BaObservation& o = P_.observations[k];
+    if (cam_var_[o.camera] >= 0 || pt_var_[o.point] >= 0) continue;
+    if (baResidual(P_, o, &r)) {
+      const double s = r.squaredNorm();
+      fixed_cost_ += kernel_.rho(s);
+      fixed_norm_[k] = std::sqrt(s);
+    } else {
+      fixed_cost_ += kernel_.sigma2;
+      fixed_norm_[k] = std::numeric_limits<double>::infinity();
+    }
+  }
 }
 
 namespace {
@@ -97,13 +111,13 @@ namespace {
 // of the pinhole Jacobian [A 0 B; 0 C D], the rows of d r / d p_w (jp0, jp1) and of
 // d r / d camera (jc0, jc1, right-perturbation). Same formulas as reprojectionJacobians.
 struct ObsEval {
-  double x, y, z, r0, r1, sq;
+  double x, y, z, r0, r1, sq, inv;  // inv = 1 / (sigma^2 + sq)
   double A, B, C, D;
   double jp0[3], jp1[3];
 
   // Returns false when the point is at depth <= min_depth (no residual).
-  inline bool residual(const geometry::Pinhole& K, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
-                       const Eigen::Vector3d& p, const Eigen::Vector2d& uv) {
+  inline bool residual(const geometry::Pinhole& K, double sigma2, const Eigen::Matrix3d& R,
+                       const Eigen::Vector3d& t, const Eigen::Vector3d& p, const Eigen::Vector2d& uv) {
     const double* m = R.data();
     const double d0 = p.x() - t.x(), d1 = p.y() - t.y(), d2 = p.z() - t.z();
     x = m[0] * d0 + m[1] * d1 + m[2] * d2;
@@ -116,10 +130,15 @@ struct ObsEval {
     r0 = uv.x() - (A * x + K.cx);
     r1 = uv.y() - (C * y + K.cy);
     sq = r0 * r0 + r1 * r1;
+    inv = 1.0 / (sigma2 + sq);
     B = -A * x * iz;
     D = -C * y * iz;
     return true;
   }
+  // Geman-McClure (geometry::GemanMcClure) from the one division: rho = sigma^2 s / (sigma^2 + s),
+  // IRLS weight rho' = sigma^4 / (sigma^2 + s)^2.
+  inline double rho(double sigma2) const { return sigma2 * sq * inv; }
+  inline double weight(double sigma2) const { return sigma2 * sigma2 * inv * inv; }
   inline void pointJacobian(const Eigen::Matrix3d& R) {
     const double* m = R.data();
     for (int k = 0; k < 3; ++k) {
@@ -136,17 +155,32 @@ struct ObsEval {
       (*g)(l) += jp0[l] * wr0 + jp1[l] * wr1;
     }
   }
-  // Camera rows: Hcc += w Jc^T Jc (upper triangle), gc += w Jc^T r, Hcp = w Jc^T Jp.
-  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* gc, Matrix63d* Hcp) const {
+  // Camera rows: Hcc += w Jc^T Jc (upper triangle; with Hcc null only its diagonal, into
+  // hdiag), gc += w Jc^T r; with Jc/Wjp, stores the camera rows and the weighted point rows
+  // (H_cp = Jc^T Wjp).
+  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* hdiag, Vector6d* gc, Matrix26d* Jc,
+                        Matrix23d* Wjp) const {
     const double jc0[6] = {A, 0.0, B, B * y, A * z - B * x, -A * y};
     const double jc1[6] = {0.0, C, D, D * y - C * z, -D * x, C * x};
     const double wr0 = w * r0, wr1 = w * r1;
     for (int l = 0; l < 6; ++l) {
       const double a0 = w * jc0[l], a1 = w * jc1[l];
-      for (int k = 0; k <= l; ++k) (*Hcc)(k, l) += a0 * jc0[k] + a1 * jc1[k];
+      if (Hcc) {
+        for (int k = 0; k <= l; ++k) (*Hcc)(k, l) += a0 * jc0[k] + a1 * jc1[k];
+      } else {
+        (*hdiag)(l) += a0 * jc0[l] + a1 * jc1[l];
+      }
       (*gc)(l) += jc0[l] * wr0 + jc1[l] * wr1;
-      if (Hcp)
-        for (int m = 0; m < 3; ++m) (*Hcp)(l, m) = a0 * jp0[m] + a1 * jp1[m];
+    }
+    if (Jc) {
+      for (int l = 0; l < 6; ++l) {
+        (*Jc)(0, l) = jc0[l];
+        (*Jc)(1, l) = jc1[l];
+      }
+      for (int m = 0; m < 3; ++m) {
+        (*Wjp)(0, m) = w * jp0[m];
+        (*Wjp)(1, m) = w * jp1[m];
+      }
     }
   }
 };
@@ -164,53 +198,126 @@ double SubspaceGn::linearize() {
   const int npf = freePoints();
   cacheCameras();
   const int T = std::max(1, O_.threads);
+  // With use_schur the observations of free points enter the camera blocks only through the
+  // Schur complement's diagonal blocks, Jc^T (w I - M) Jc (solveStep): here only the diagonal
+  // of their H_cc (for the damping) is summed. Free cameras' observations of fixed points
+  // give full H_cc blocks.
+  const bool schur = O_.use_schur;
   Hcc_t_.resize(T);
   gc_t_.resize(T);
+  hdiag_t_.resize(T);
   for (int t = 0; t < T; ++t) {
-    Hcc_t_[t].assign(ncf, Matrix6d::Zero());
+    if (!schur) Hcc_t_[t].assign(ncf, Matrix6d::Zero());
     gc_t_[t].assign(ncf, Vector6d::Zero());
+    hdiag_t_[t].assign(ncf, Vector6d::Zero());
   }
   std::vector<double> cost_t(T, 0.0);
   parallelFor(npf, T, [&](int begin, int end, int t) {
+    // The two residual rows side by side in 2-wide arrays (as evalPoint; SSE2 on x86-64), the
+    // per-point accumulators summed once per point, the rows stored straight into Jc_/Wjp_.
+    using A2 = Eigen::Array2d;
+    using C2 = Eigen::Map<const A2>;
+    using V2 = Eigen::Map<A2>;
+    const double s2 = kernel_.sigma2;
+    const A2 fxy(K_.fx, K_.fy), cxy(K_.cx, K_.cy);
     double cost = 0.0;
-    std::vector<Matrix6d>& Hcc = Hcc_t_[t];
-    std::vector<Vector6d>& gc = gc_t_[t];
+    Matrix6d* Hcc = schur ? nullptr : Hcc_t_[t].data();
+    Vector6d* gc = gc_t_[t].data();
+    Vector6d* hdiag = hdiag_t_[t].data();
     for (int j = begin; j < end; ++j) {
-      Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-      Eigen::Vector3d g = Eigen::Vector3d::Zero();
-      const Eigen::Vector3d p = P_.points[pts_[j]].p_w;
+      A2 H00 = A2::Zero(), H01 = A2::Zero(), H02 = A2::Zero(), H11 = A2::Zero(), H12 = A2::Zero(), H22 = A2::Zero();
+      A2 G0 = A2::Zero(), G1 = A2::Zero(), G2 = A2::Zero();
+      const Eigen::Vector3d& pw = P_.points[pts_[j]].p_w;
+      const double px = pw.x(), py = pw.y(), pz = pw.z();
       for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
-        const int c = obs_cam_[a];
         const int s = obs_slot_[a];
-        ObsEval e;
-        if (!e.residual(K_, R_[c], t_[c], p, obs_uv_[a])) {
-          cost += kernel_.sigma2;
-          if (s >= 0) Hcp_[s].setZero();
+        const double* q = cam_pack_[obs_cam_[a]].data();
+        const double d0 = px - q[9], d1 = py - q[10], d2 = pz - q[11];
+        const double z = q[6] * d0 + q[7] * d1 + q[8] * d2;
+        if (z <= kMinDepth) {
+          cost += s2;
+          if (s >= 0) {
+            Jc_[s].setZero();
+            Wjp_[s].setZero();
+            slot_w_[s] = 0.0;
+          }
           continue;
         }
-        cost += kernel_.rho(e.sq);
-        const double w = kernel_.weight(e.sq);
-        e.pointJacobian(R_[c]);
-        e.addPoint(w, &H, &g);
-        if (s >= 0) {
-          const int ci = slot_cam_[s];
-          e.addCamera(w, &Hcc[ci], &gc[ci], &Hcp_[s]);
+        const A2 xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
+        const double iz = 1.0 / z;
+        const A2 AC = fxy * iz;  // (A, C): the pinhole Jacobian is [A 0 B; 0 C D]
+        const A2 r = C2(obs_uv_[a].data()) - (AC * xy + cxy);
+        const double sq = r(0) * r(0) + r(1) * r(1);
+        const double inv = 1.0 / (s2 + sq);
+        cost += s2 * sq * inv;
+        const double w = s2 * s2 * inv * inv;
+        const A2 BD = -AC * xy * iz;
+        // Columns of d r / d p_w, (row 0, row 1) each, and the same scaled by w.
+        const A2 j0 = -(AC * C2(q) + BD * q[6]);
+        const A2 j1 = -(AC * C2(q + 2) + BD * q[7]);
+        const A2 j2 = -(AC * C2(q + 4) + BD * q[8]);
+        const A2 wj0 = w * j0, wj1 = w * j1, wj2 = w * j2;
+        H00 += wj0 * j0;
+        H01 += wj0 * j1;
+        H02 += wj0 * j2;
+        H11 += wj1 * j1;
+        H12 += wj1 * j2;
+        H22 += wj2 * j2;
+        const A2 wr = w * r;
+        G0 += j0 * wr;
+        G1 += j1 * wr;
+        G2 += j2 * wr;
+        if (s < 0) continue;
+        const int ci = slot_cam_[s];
+        // Columns of d r / d camera (right perturbation), column-major 2x6: column l at J + 2l.
+        const double A = AC(0), C = AC(1), B = BD(0), D = BD(1), x = xy(0), y = xy(1);
+        double* J = Jc_[s].data();
+        J[0] = A;
+        J[1] = 0.0;
+        J[2] = 0.0;
+        J[3] = C;
+        J[4] = B;
+        J[5] = D;
+        J[6] = B * y;
+        J[7] = D * y - C * z;
+        J[8] = A * z - B * x;
+        J[9] = -D * x;
+        J[10] = -A * y;
+        J[11] = C * x;
+        double* W = Wjp_[s].data();
+        V2(W + 0) = wj0;
+        V2(W + 2) = wj1;
+        V2(W + 4) = wj2;
+        slot_w_[s] = w;
+        double* G = gc[ci].data();
+        double* Hd = hdiag[ci].data();
+        for (int l = 0; l < 6; ++l) {
+          const A2 col = C2(J + 2 * l);
+          G[l] += (col * wr).sum();
+          Hd[l] += w * (col * col).sum();
+        }
+        if (Hcc) {
+          Matrix6d& Hc = Hcc[ci];
+          for (int l = 0; l < 6; ++l)
+            for (int k = 0; k <= l; ++k) Hc(k, l) += w * (J[2 * k] * J[2 * l] + J[2 * k + 1] * J[2 * l + 1]);
         }
       }
-      mirrorUpper<3>(&H);
-      Hpp_[j] = H;
-      gp_[j] = g;
+      const double h00 = H00.sum(), h01 = H01.sum(), h02 = H02.sum(), h11 = H11.sum(), h12 = H12.sum(), h22 = H22.sum();
+      Hpp_[j] << h00, h01, h02, h01, h11, h12, h02, h12, h22;
+      gp_[j] = Eigen::Vector3d(G0.sum(), G1.sum(), G2.sum());
     }
     cost_t[t] = cost;
   });
   double cost = 0.0;
   for (int t = 0; t < T; ++t) cost += cost_t[t];
   for (int i = 0; i < ncf; ++i) {
-    Hcc_[i] = Hcc_t_[0][i];
+    Hcc_[i] = schur ? Matrix6d::Zero() : Hcc_t_[0][i];
     gc_[i] = gc_t_[0][i];
+    hdiag_[i] = hdiag_t_[0][i];
     for (int t = 1; t < T; ++t) {
-      Hcc_[i] += Hcc_t_[t][i];
+      if (!schur) Hcc_[i] += Hcc_t_[t][i];
       gc_[i] += gc_t_[t][i];
+      hdiag_[i] += hdiag_t_[t][i];
     }
   }
   // Free cameras observing fixed points.
@@ -218,15 +325,88 @@ double SubspaceGn::linearize() {
     const BaObservation& o = P_.observations[k];
     const int ci = cam_var_[o.camera];
     ObsEval e;
-    if (!e.residual(K_, R_[o.camera], t_[o.camera], P_.points[o.point].p_w, o.uv)) {
+    if (!e.residual(K_, kernel_.sigma2, R_[o.camera], t_[o.camera], P_.points[o.point].p_w, o.uv)) {
       cost += kernel_.sigma2;
       continue;
     }
-    cost += kernel_.rho(e.sq);
-    e.addCamera(kernel_.weight(e.sq), &Hcc_[ci], &gc_[ci], nullptr);
+    cost += e.rho(kernel_.sigma2);
+    e.addCamera(e.weight(kernel_.sigma2), &Hcc_[ci], nullptr, &gc_[ci], nullptr, nullptr);
   }
-  for (int i = 0; i < ncf; ++i) mirrorUpper<6>(&Hcc_[i]);
+  for (int i = 0; i < ncf; ++i) {
+    mirrorUpper<6>(&Hcc_[i]);
+    // Diagonal of the whole H_cc (the Schur path's slot part plus the full blocks).
+    if (schur) hdiag_[i] += Hcc_[i].diagonal();
+    else hdiag_[i] = Hcc_[i].diagonal();
+  }
   return cost;
+}
+
+double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& xw, Eigen::Matrix3d* H, Eigen::Vector3d* g) const {
+  // Scalars, as in linearize(); the cost-only loop is the refinement's line search.
+  const double fx = K_.fx, fy = K_.fy, cx = K_.cx, cy = K_.cy, s2 = kernel_.sigma2;
+  const double px = xw.x(), py = xw.y(), pz = xw.z();
+  const int a0 = pt_begin_[j], a1 = pt_begin_[j + 1];
+  double c = 0.0;
+  using A2 = Eigen::Array2d;
+  using C2 = Eigen::Map<const A2>;
+  const A2 fxy(fx, fy), cxy(cx, cy);
+  if (!H) {
+    for (int a = a0; a < a1; ++a) {
+      const double* q = cam_pack_[obs_cam_[a]].data();
+      const double d0 = px - q[9], d1 = py - q[10], d2 = pz - q[11];
+      const double z = q[6] * d0 + q[7] * d1 + q[8] * d2;
+      if (z <= kMinDepth) {
+        c += s2;
+        continue;
+      }
+      const A2 xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
+      const A2 r = C2(obs_uv_[a].data()) - (fxy * (1.0 / z) * xy + cxy);
+      const double sq = r(0) * r(0) + r(1) * r(1);
+      c += s2 * sq * (1.0 / (s2 + sq));
+    }
+    return c;
+  }
+  // The two residual rows side by side in 2-wide arrays (SSE2 on x86-64): the accumulators
+  // hold the rows' terms separately and are summed once per point.
+  A2 H00 = A2::Zero(), H01 = A2::Zero(), H02 = A2::Zero(), H11 = A2::Zero(), H12 = A2::Zero(), H22 = A2::Zero();
+  A2 G0 = A2::Zero(), G1 = A2::Zero(), G2 = A2::Zero();
+  for (int a = a0; a < a1; ++a) {
+    const double* q = cam_pack_[obs_cam_[a]].data();
+    const double d0 = px - q[9], d1 = py - q[10], d2 = pz - q[11];
+    const double z = q[6] * d0 + q[7] * d1 + q[8] * d2;
+    if (z <= kMinDepth) {
+      c += s2;
+      continue;
+    }
+    const A2 xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
+    const double iz = 1.0 / z;
+    const A2 AC = fxy * iz;
+    const A2 r = C2(obs_uv_[a].data()) - (AC * xy + cxy);
+    const double sq = r(0) * r(0) + r(1) * r(1);
+    const double inv = 1.0 / (s2 + sq);
+    c += s2 * sq * inv;
+    const double w = s2 * s2 * inv * inv;
+    const A2 BD = -AC * xy * iz;
+    // Columns of d r / d p_w: (row 0, row 1) of column k = -((A, C) * (R0k, R1k) + (B, D) * R2k).
+    const A2 j0 = -(AC * C2(q) + BD * q[6]);
+    const A2 j1 = -(AC * C2(q + 2) + BD * q[7]);
+    const A2 j2 = -(AC * C2(q + 4) + BD * q[8]);
+    const A2 wj0 = w * j0, wj1 = w * j1, wj2 = w * j2;
+    H00 += wj0 * j0;
+    H01 += wj0 * j1;
+    H02 += wj0 * j2;
+    H11 += wj1 * j1;
+    H12 += wj1 * j2;
+    H22 += wj2 * j2;
+    const A2 wr = w * r;
+    G0 += j0 * wr;
+    G1 += j1 * wr;
+    G2 += j2 * wr;
+  }
+  const double h00 = H00.sum(), h01 = H01.sum(), h02 = H02.sum(), h11 = H11.sum(), h12 = H12.sum(), h22 = H22.sum();
+  *H << h00, h01, h02, h01, h11, h12, h02, h12, h22;
+  *g = Eigen::Vector3d(G0.sum(), G1.sum(), G2.sum());
+  return c;
 }
 
 double SubspaceGn::refinePoints(int iterations) {
@@ -236,42 +416,26 @@ double SubspaceGn::refinePoints(int iterations) {
   parallelFor(freePoints(), T, [&](int begin, int end, int t) {
     for (int j = begin; j < end; ++j) {
       Eigen::Vector3d p = P_.points[pts_[j]].p_w;
-      auto eval = [&](const Eigen::Vector3d& x, Eigen::Matrix3d* H, Eigen::Vector3d* g) {
-        double c = 0.0;
-        if (H) H->setZero(), g->setZero();
-        for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
-          const int cam = obs_cam_[a];
-          ObsEval e;
-          if (!e.residual(K_, R_[cam], t_[cam], x, obs_uv_[a])) {
-            c += kernel_.sigma2;
-            continue;
-          }
-          c += kernel_.rho(e.sq);
-          if (!H) continue;
-          e.pointJacobian(R_[cam]);
-          e.addPoint(kernel_.weight(e.sq), H, g);
-        }
-        if (H) mirrorUpper<3>(H);
-        return c;
-      };
       double lambda = O_.initial_lambda;
-      Eigen::Matrix3d H;
-      Eigen::Vector3d g;
+      // The first linearization is activeCost's, at this same estimate.
+      Eigen::Matrix3d H = ref_H_[j];
+      Eigen::Vector3d g = ref_g_[j];
+      double c0 = ref_c_[j];
       for (int it = 0; it < iterations; ++it) {
-        const double c0 = eval(p, &H, &g);
+        if (it > 0) c0 = evalPoint(j, p, &H, &g);
         bool improved = false;
         double gain = 0.0;
         for (int attempt = 0; attempt < 3 && !improved; ++attempt) {
           Eigen::Matrix3d Hd = H;
           Hd.diagonal() = Hd.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
           const Eigen::Vector3d dp = -(Hd.inverse() * g);
-          double c1 = eval(p + dp, nullptr, nullptr);
+          double c1 = evalPoint(j, p + dp, nullptr, nullptr);
           if (c1 < c0) {
             // The IRLS model over-estimates the curvature of Geman-McClure (rho'' < 0), so its
             // steps fall short: try doubling the step while the cost keeps decreasing.
             double scale = 1.0;
             for (int e = 0; e < O_.point_extrapolation; ++e) {
-              const double c2 = eval(p + (2.0 * scale) * dp, nullptr, nullptr);
+              const double c2 = evalPoint(j, p + (2.0 * scale) * dp, nullptr, nullptr);
               if (!(c2 < c1)) break;
               c1 = c2;
               scale *= 2.0;
@@ -299,9 +463,13 @@ void SubspaceGn::cacheCameras() {
   const size_t nc = P_.cameras.size();
   R_.resize(nc);
   t_.resize(nc);
+  cam_pack_.resize(nc);
   for (size_t c = 0; c < nc; ++c) {
     R_[c] = P_.cameras[c].T_w_c.linear();
     t_[c] = P_.cameras[c].T_w_c.translation();
+    const double* m = R_[c].data();
+    std::array<double, 12>& q = cam_pack_[c];
+    q = {m[0], m[3], m[1], m[4], m[2], m[5], m[6], m[7], m[8], t_[c].x(), t_[c].y(), t_[c].z()};
   }
 }
 
@@ -328,16 +496,23 @@ void SubspaceGn::applyStep() {
 double SubspaceGn::activeCost() {
   cacheCameras();
   const int T = std::max(1, O_.threads);
+  const bool keep = O_.point_iterations > 0;
+  if (keep) {
+    ref_H_.resize(pts_.size());
+    ref_g_.resize(pts_.size());
+    ref_c_.resize(pts_.size());
+  }
   std::vector<double> cost_t(T, 0.0);
-  auto term = [&](int cam, const Eigen::Vector3d& p_w, const Eigen::Vector2d& uv) {
-    ObsEval e;
-    return e.residual(K_, R_[cam], t_[cam], p_w, uv) ? kernel_.rho(e.sq) : kernel_.sigma2;
-  };
   parallelFor(freePoints(), T, [&](int begin, int end, int t) {
     double c = 0.0;
     for (int j = begin; j < end; ++j) {
-      const Eigen::Vector3d p = P_.points[pts_[j]].p_w;
-      for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) c += term(obs_cam_[a], p, obs_uv_[a]);
+      const Eigen::Vector3d& p = P_.points[pts_[j]].p_w;
+      if (keep) {
+        ref_c_[j] = evalPoint(j, p, &ref_H_[j], &ref_g_[j]);
+        c += ref_c_[j];
+      } else {
+        c += evalPoint(j, p, nullptr, nullptr);
+      }
     }
     cost_t[t] = c;
   });
@@ -345,7 +520,10 @@ double SubspaceGn::activeCost() {
   for (double c : cost_t) cost += c;
   for (int k : cam_only_obs_) {
     const BaObservation& o = P_.observations[k];
-    cost += term(o.camera, P_.points[o.point].p_w, o.uv);
+    ObsEval e;
+    cost += e.residual(K_, kernel_.sigma2, R_[o.camera], t_[o.camera], P_.points[o.point].p_w, o.uv)
+                ? e.rho(kernel_.sigma2)
+                : kernel_.sigma2;
   }
   return cost;
 }

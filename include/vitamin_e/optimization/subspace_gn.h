@@ -6,7 +6,9 @@
 //  1. Linearize every observation that touches a free variable at the current estimate
 //     (analytic Jacobians, Geman-McClure IRLS weights w = rho'(|r|^2)): per camera the 6x6
 //     block H_cc and g_c, per point the 3x3 block H_pp and g_p, per (camera, point) pair the
-//     6x3 coupling H_cp. Nothing larger than 6x6 is ever inverted or factorized.
+//     6x3 coupling H_cp = Jc^T (w Jp), kept as its two camera rows and two weighted point rows
+//     (rank 2: the Schur complement is accumulated through the 2-dimensional residual space).
+//     Nothing larger than 6x6 is ever inverted or factorized.
 //  2. Camera blocks (Eq. 11). With use_schur (default) each camera update eliminates the points
 //     it sees (the supplementary's variable elimination): the 6x6 blocks of the reduced camera
 //     system S_il = H_cc,i [i==l] - sum_j H_cp,ij H_pp,j^-1 H_pc,jl (only pairs of free cameras
