@@ -67,7 +67,7 @@ struct TrackerConfig {
                                     // removes its frame-to-frame jitter); 1 = the extremum alone (off)
   int align_radius_px = 4;          // patch of that alignment: (2r+1)^2 px, r in [1, 4]
   int align_iterations = 2;         // its Gauss-Newton steps (>= 1)
-  double max_align_disagreement_px = 0.75;  // confirmation: a track dies when that patch alignment (started
+  double max_align_disagreement_px = 1.0;   // confirmation: a track dies when that patch alignment (started
                                     // from the flow prediction, independent of the climb) fails or ends farther
                                     // than this from the climbed extremum [px]: the climb jumped to a neighbouring
                                     // extremum (0 = off; needs extremum_weight < 1)
