@@ -3,7 +3,11 @@
 // the 3D point behind a tracked pixel of frame k-1 (undistort, ray-cast into the
 // scene's room and boxes) is projected (with distortion) into frame k; a track
 // step is an inlier when it lands within 1 px of that reprojection.
-//   bench_tracking_render RENDER_DIR [--frames N] [--max-points N] [--threads N]
+//   bench_tracking_render RENDER_DIR [--start K] [--frames N] [--max-points N] [--threads N] [--per-frame 1]
+// Track length is given three ways: over every track ever started (most new
+// extrema end at their first step, so this median is 1-2), over the tracks that
+// survived their first step, and as the median age of the tracked points of a
+// frame (what the back end sees).
 // Prints a table and, as the last line, a JSON summary.
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -206,11 +210,15 @@ int main(int argc, char** argv) {
   }
   const std::string dir = argv[1];
   int max_frames = 1 << 30;
+  int start_frame = 0;
+  int per_frame = 0;  // 1: one line per frame on stderr (tracked, new, flow, losses by reason)
   int run_klt = 1;
   vt::TrackerConfig cfg;
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
     if (k == "--frames") max_frames = std::stoi(argv[i + 1]);
+    else if (k == "--start") start_frame = std::stoi(argv[i + 1]);
+    else if (k == "--per-frame") per_frame = std::stoi(argv[i + 1]);
     else if (k == "--max-points") cfg.max_points = std::stoi(argv[i + 1]);
     else if (k == "--threads") cfg.threads = std::stoi(argv[i + 1]);
     else if (k == "--lambda") cfg.lambda = std::stod(argv[i + 1]);
@@ -235,6 +243,8 @@ int main(int argc, char** argv) {
     else if (k == "--extremum-weight") cfg.extremum_weight = std::stod(argv[i + 1]);
     else if (k == "--align-radius") cfg.align_radius_px = std::stoi(argv[i + 1]);
     else if (k == "--align-iterations") cfg.align_iterations = std::stoi(argv[i + 1]);
+    else if (k == "--disagree") cfg.max_align_disagreement_px = std::stod(argv[i + 1]);
+    else if (k == "--confirm-max-unaligned") cfg.confirm_max_unaligned_fraction = std::stod(argv[i + 1]);
     else if (k == "--klt") run_klt = std::stoi(argv[i + 1]);
     else { std::fprintf(stderr, "unknown option %s\n", k.c_str()); return 2; }
   }
@@ -244,6 +254,7 @@ int main(int argc, char** argv) {
   cam.h = cam.cam.height();
   const Scene scene = loadScene(dir + "/scene.json");
   std::vector<Frame> frames = loadFrames(dir);
+  frames.erase(frames.begin(), frames.begin() + std::min<size_t>(frames.size(), std::max(0, start_frame)));
   if (static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
   if (frames.size() < 2) { std::fprintf(stderr, "need >= 2 frames with ground truth\n"); return 2; }
   std::vector<cv::Mat> images;
@@ -259,6 +270,9 @@ int main(int argc, char** argv) {
   std::map<std::string, std::vector<double>> stage;
   int min_tracked = 1 << 30;
   long hist[5] = {0, 0, 0, 0, 0};
+  std::map<std::string, long> lost_by, lost_new_by;
+  long spawned = 0;
+  std::vector<double> live_age;  // per frame: median age + 1 of its tracked points (point-weighted length)
   for (size_t k = 0; k < frames.size(); ++k) {
     const auto t0 = Clock::now();
     const double c0 = cpuMs();
@@ -274,7 +288,22 @@ int main(int argc, char** argv) {
       tracked_pf.push_back(tf.num_tracked);
       flow_ok_pf.push_back(tf.flow_ok);
       min_tracked = std::min(min_tracked, tf.num_tracked);
+      for (const auto& kv : tf.lost_by) lost_by[kv.first] += kv.second;
+      if (per_frame) {
+        std::fprintf(stderr, "FRAME %zu tracked %d new %d flow_ok %d matches %d b %.1f %.1f sigma %.2f:", k, tf.num_tracked, tf.num_new,
+                     tf.flow_ok, tf.flow_matches, tf.b.x(), tf.b.y(), tf.smoothing_sigma);
+        for (const auto& kv : tf.lost_by) std::fprintf(stderr, " %s %d", kv.first.c_str(), kv.second);
+        std::fprintf(stderr, "\n");
+      }
+      for (const auto& kv : tf.lost_new_by) lost_new_by[kv.first] += kv.second;
+      std::vector<double> ages;
+      ages.reserve(tf.points.size());
+      for (const auto& p : tf.points) {
+        if (p.age > 0) ages.push_back(p.age + 1);
+      }
+      if (!ages.empty()) live_age.push_back(median(ages));
     }
+    spawned += tf.num_new;
     std::unordered_map<std::uint64_t, Eigen::Vector2f> cur;
     for (const auto& p : tf.points) {
       cur[p.id] = p.uv;
@@ -302,7 +331,11 @@ int main(int argc, char** argv) {
     }
     prev.swap(cur);
   }
-  for (const auto& kv : life) ours.lengths.push_back(kv.second);
+  std::vector<double> lengths_tracked;  // tracks that survived their first step
+  for (const auto& kv : life) {
+    ours.lengths.push_back(kv.second);
+    if (kv.second > 1) lengths_tracked.push_back(kv.second);
+  }
 
   // ---- OpenCV KLT with the same number of points ----
   RunStats klt;
@@ -374,6 +407,10 @@ int main(int argc, char** argv) {
   }
   for (int a : ages) klt_life.push_back(a + 1);
   for (int l : klt_life) klt.lengths.push_back(l);
+  std::vector<double> klt_lengths_tracked;
+  for (double l : klt.lengths) {
+    if (l > 1) klt_lengths_tracked.push_back(l);
+  }
 
   auto pct = [](std::vector<double> v, double p) { return vitamin_e::percentile(std::move(v), p); };
   const double our_ratio = ours.checked ? static_cast<double>(ours.inliers) / ours.checked : 0.0;
@@ -387,6 +424,9 @@ int main(int argc, char** argv) {
   std::printf("%-34s %14.2f %14.2f\n", "ms/frame p95", pct(ours.ms, 95), pct(klt.ms, 95));
   std::printf("%-34s %14.2f %14.2f\n", "CPU ms/frame median (all threads)", median(ours.cpu), median(klt.cpu));
   std::printf("%-34s %14.0f %14.0f\n", "track length median [frames]", median(ours.lengths), median(klt.lengths));
+  std::printf("%-34s %14.0f %14.0f\n", "  of tracks surviving one step", median(lengths_tracked), median(klt_lengths_tracked));
+  std::printf("%-34s %14.0f %14s\n", "age of tracked points, median", median(live_age), "");
+  std::printf("%-34s %14ld %14zu\n", "tracks started", spawned, klt.lengths.size());
   std::printf("%-34s %14.4f %14.4f\n", "track steps within 1 px", our_ratio, klt_ratio);
   std::printf("%-34s %14ld %14ld\n", "track steps checked", ours.checked, klt.checked);
   std::printf("%-34s %14.4f %14.4f\n", "after 10 frames within 1 px", ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
@@ -397,14 +437,18 @@ int main(int argc, char** argv) {
   std::printf("%-34s %.3f %.3f %.3f %.3f %.3f\n", "error <.25 <.5 <1 <2 >=2 px", hist[0] / (double)ours.checked,
               hist[1] / (double)ours.checked, hist[2] / (double)ours.checked, hist[3] / (double)ours.checked,
               hist[4] / (double)ours.checked);
+  for (const auto& kv : lost_by) {
+    std::printf("  lost by %-24s %8ld (%ld of them new)\n", kv.first.c_str(), kv.second, lost_new_by[kv.first]);
+  }
   for (const auto& kv : stage) {
     std::printf("  stage %-26s %8.2f ms median %8.2f ms p95\n", kv.first.c_str(), median(kv.second), pct(kv.second, 95));
   }
   std::printf("{\"points_per_frame_median\":%.0f,\"ms_per_frame_median\":%.3f,\"ms_per_frame_p95\":%.3f,"
-              "\"track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
+              "\"track_length_median\":%.1f,\"track_length_median_surviving\":%.1f,\"tracked_age_median\":%.1f,\"klt_track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
               "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f,\"cpu_ms_per_frame_median\":%.3f,\"klt_cpu_ms_per_frame_median\":%.3f,"
               "\"drift10_1px_ratio\":%.4f,\"klt_drift10_1px_ratio\":%.4f}\n",
-              median(ours.points), median(ours.ms), pct(ours.ms, 95), median(ours.lengths), our_ratio, min_tracked,
+              median(ours.points), median(ours.ms), pct(ours.ms, 95), median(ours.lengths), median(lengths_tracked),
+              median(live_age), median(klt.lengths), our_ratio, min_tracked,
               median(klt.points), median(klt.ms), klt_ratio, median(ours.cpu), median(klt.cpu),
               ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
               klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);

@@ -88,6 +88,8 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("tracker", "min_track_sharpness", &t.min_track_sharpness));
   f.push_back(field("tracker", "extremum_weight", &t.extremum_weight));
   f.push_back(field("tracker", "align_radius_px", &t.align_radius_px));
+  f.push_back(field("tracker", "max_align_disagreement_px", &t.max_align_disagreement_px));
+  f.push_back(field("tracker", "confirm_max_unaligned_fraction", &t.confirm_max_unaligned_fraction));
   f.push_back(field("tracker", "threads", &t.threads));
   // triangulation
   auto& tr = c.triangulation;

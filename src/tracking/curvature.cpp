@@ -161,9 +161,12 @@ bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const Cl
   return false;
 }
 
-Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign) {
+Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign, float* peak) {
   const int x = p.x(), y = p.y();
-  if (x < 1 || y < 1 || x >= kappa.cols - 1 || y >= kappa.rows - 1) return p.cast<float>();
+  if (x < 1 || y < 1 || x >= kappa.cols - 1 || y >= kappa.rows - 1) {
+    if (peak) *peak = x >= 0 && y >= 0 && x < kappa.cols && y < kappa.rows ? sign * kappa.ptr<float>(y)[x] : 0.f;
+    return p.cast<float>();
+  }
   const float* rm = kappa.ptr<float>(y - 1);
   const float* r0 = kappa.ptr<float>(y);
   const float* rp = kappa.ptr<float>(y + 1);
@@ -185,6 +188,10 @@ Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, f
   }
   ox = std::clamp(ox, -0.5f, 0.5f);
   oy = std::clamp(oy, -0.5f, 0.5f);
+  if (peak) {
+    const float q = c + gx * ox + gy * oy + 0.5f * (hxx * ox * ox + 2.f * hxy * ox * oy + hyy * oy * oy);
+    *peak = std::max(c, q);  // never below the sample itself
+  }
   return Eigen::Vector2f(x + ox, y + oy);
 }
 

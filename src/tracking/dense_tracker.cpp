@@ -33,10 +33,23 @@ struct Track {
 struct Step {
   Eigen::Vector2f uv;
   Eigen::Vector2f ext;  // sub-pixel extremum (uv may be filtered)
+  Eigen::Vector2f pred; // flow prediction x_bar
+  Eigen::Vector2f patch;  // the previous position carried over by patch alignment (if aligned)
+  bool aligned = false;
   Eigen::Vector2i px;
   float kappa = 0.f;
+  float peak = 0.f;     // sign*kappa of the sub-pixel peak
   bool ok = false;
+  int fail = 0;  // LossReason of a failed step (kLossOk when ok)
 };
+
+// Why a track step failed; counted per frame in TrackerFrame::lost_by.
+enum LossReason : int {
+  kLossOk = 0, kLossClimb, kLossWeak, kLossStrengthChange, kLossFlat, kLossBackClimb, kLossForwardBackward,
+  kLossUnconfirmed, kLossDuplicate, kLossReasons
+};
+const char* const kLossNames[kLossReasons] = {"ok", "climb", "weak", "strength_change", "flat", "back_climb",
+                                              "forward_backward", "unconfirmed", "duplicate"};
 
 
 }  // namespace
@@ -87,9 +100,11 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       const Track& t = tracks[i];
       Step& s = steps[i];
       s.ok = false;
+      s.fail = kLossClimb;
       ClimbParams fwd{t.sign, static_cast<float>(cfg.lambda) * scale, sigma2, cfg.max_climb_steps, 2};
       const Eigen::Vector2f r = cfg.predict_parallax ? t.resid : Eigen::Vector2f::Zero();
       const Eigen::Vector2f pred = Af * t.uv + bf + r;
+      s.pred = pred;
       if (!hillClimb(kappa, pred, fwd, &s.px)) continue;
       if (cfg.polish_steps > 0) {
         // The prior biases the maximum of F; the extremum is the maximum of kappa.
@@ -97,14 +112,20 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
         if (!hillClimb(kappa, s.px.cast<float>(), pol, &s.px)) continue;
       }
       s.kappa = kappa.ptr<float>(s.px.y())[s.px.x()];
-      if (t.sign * s.kappa < min_k) continue;
-      const float strength = t.sign * s.kappa * inv_scale;
+      float peak = t.sign * s.kappa;
+      s.uv = refineSubpixel(kappa, s.px, t.sign, &peak);
+      s.peak = peak;
+      s.fail = kLossWeak;
+      if (peak < min_k) continue;
+      const float strength = peak * inv_scale;
+      s.fail = kLossStrengthChange;
       if (strength > t.strength * max_ratio || strength * max_ratio < t.strength) continue;
+      s.fail = kLossFlat;
       if (min_sharp > 0.f && peakSharpness(kappa, s.px, t.sign) < min_sharp) continue;
-      s.uv = refineSubpixel(kappa, s.px, t.sign);
       // Backward: climb the previous curvature from the inverse prediction.
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
       Eigen::Vector2i q;
+      s.fail = kLossBackClimb;
       if (!hillClimb(prev_kappa, Ainv * (s.uv - bf - r), bwd, &q)) continue;
       if (cfg.polish_steps > 0) {
         const ClimbParams pol{t.sign, 0.f, 1.f, cfg.polish_steps, 2};
@@ -112,6 +133,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       }
       const Eigen::Vector2f qs = refineSubpixel(prev_kappa, q, t.sign);
       s.ok = (qs - t.uv).squaredNorm() <= fb2;
+      s.fail = s.ok ? kLossOk : kLossForwardBackward;
       s.ext = s.uv;
       if (s.ok && blend > 0.f && (pred - s.uv).squaredNorm() < 1.f) s.uv += blend * (pred - s.uv);
     }
@@ -121,17 +143,42 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
 
 void DenseTracker::Impl::alignSteps() {
   const float w = static_cast<float>(cfg.extremum_weight);
-  // The patch may move up to 1.5 px from the extremum; farther fails (the track is kept, unfiltered).
+  // To confirm the climb, the patch alignment starts from the flow prediction,
+  // not from the climbed extremum, so that it is an independent witness of where
+  // the point went; as a filter alone it starts from the extremum (it converges
+  // more often from there). It may move up to 1.5 px from its start.
   const PatchAlignParams ap{cfg.align_radius_px, cfg.align_iterations, 1.5f};
+  const bool from_prediction = cfg.max_align_disagreement_px > 0.0;
   auto work = [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
       Step& s = steps[i];
       if (!s.ok) continue;
-      Eigen::Vector2f x = s.ext;
-      if (alignPatch(prev_smooth, smooth, tracks[i].uv, ap, &x)) s.uv = x + w * (s.ext - x);
+      s.patch = from_prediction ? s.pred : s.ext;
+      s.aligned = alignPatch(prev_smooth, smooth, tracks[i].uv, ap, &s.patch);
     }
   };
   forStripes(static_cast<int>(tracks.size()), cfg.threads > 1 ? cfg.threads * 4 : 1, 257, work);
+  int candidates = 0, unaligned = 0;
+  for (const Step& s : steps) {
+    candidates += s.ok;
+    unaligned += s.ok && !s.aligned;
+  }
+  // Confirmation: the extremum must lie within max_align_disagreement_px of the
+  // patch's answer. Suspended on frames where the patch itself fails too often
+  // (fast motion and blur change the appearance): there it would only thin out
+  // the tracks the pose needs.
+  const bool confirm = cfg.max_align_disagreement_px > 0.0 &&
+                       unaligned <= cfg.confirm_max_unaligned_fraction * candidates;
+  const float max_d2 = static_cast<float>(cfg.max_align_disagreement_px * cfg.max_align_disagreement_px);
+  for (Step& s : steps) {
+    if (!s.ok) continue;
+    if (confirm && (!s.aligned || (s.ext - s.patch).squaredNorm() > max_d2)) {
+      s.ok = false;
+      s.fail = kLossUnconfirmed;
+      continue;
+    }
+    if (s.aligned) s.uv = s.patch + w * (s.ext - s.patch);
+  }
 }
 
 int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh) {
@@ -179,9 +226,10 @@ int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Tra
     Track t;
     t.id = next_id++;
     t.sign = e.kappa > 0.f ? 1.f : -1.f;
-    t.uv = refineSubpixel(kappa, Eigen::Vector2i(e.x, e.y), t.sign);
+    float peak = std::fabs(e.kappa);
+    t.uv = refineSubpixel(kappa, Eigen::Vector2i(e.x, e.y), t.sign, &peak);
     t.age = 0;
-    t.strength = std::fabs(e.kappa) / scale;
+    t.strength = peak / scale;
     fresh->push_back(t);
   }
   return static_cast<int>(fresh->size());
@@ -319,9 +367,11 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
         o = static_cast<int>(i) + 1;
       } else if (m.tracks[i].age > m.tracks[o - 1].age) {
         m.steps[o - 1].ok = false;
+        m.steps[o - 1].fail = kLossDuplicate;
         o = static_cast<int>(i) + 1;
       } else {
         m.steps[i].ok = false;
+        m.steps[i].fail = kLossDuplicate;
       }
     }
     for (size_t i = 0; i < m.tracks.size(); ++i) {
@@ -334,8 +384,18 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       tr.resid = s.uv - (A.cast<float>() * tr.uv + b.cast<float>());
       tr.uv = s.uv;
       tr.age += 1;
-      tr.strength = tr.sign * s.kappa / scale;
+      tr.strength = s.peak / scale;
       m.next_tracks.push_back(tr);
+    }
+    int counts[kLossReasons] = {}, young[kLossReasons] = {};
+    for (size_t i = 0; i < m.tracks.size(); ++i) {
+      const int why = m.steps[i].ok ? kLossOk : m.steps[i].fail;
+      ++counts[why];
+      if (m.tracks[i].age == 0) ++young[why];
+    }
+    for (int k = 1; k < kLossReasons; ++k) {
+      if (counts[k] > 0) out.lost_by[kLossNames[k]] = counts[k];
+      if (young[k] > 0) out.lost_new_by[kLossNames[k]] = young[k];
     }
   }
   out.num_lost = static_cast<int>(m.tracks.size() - m.next_tracks.size());

@@ -57,6 +57,11 @@ void TrackerConfig::validate() const {
           "must be in (0, 1]");
   require(align_radius_px >= 1 && align_radius_px <= 4, "align_radius_px", "must be in [1, 4]");
   require(align_iterations >= 1, "align_iterations", "must be >= 1");
+  require(std::isfinite(max_align_disagreement_px) && max_align_disagreement_px >= 0.0, "max_align_disagreement_px",
+          "must be finite and >= 0");
+  require(std::isfinite(confirm_max_unaligned_fraction) && confirm_max_unaligned_fraction >= 0.0 &&
+              confirm_max_unaligned_fraction <= 1.0,
+          "confirm_max_unaligned_fraction", "must be in [0, 1]");
   require(threads >= 1 && threads <= 64, "threads", "must be in [1, 64]");
 }
 

@@ -244,6 +244,29 @@ TEST(Curvature, PeakSharpnessSeparatesPeaksFromRidgesAndSaddles) {
 // The patch alignment recovers a sub-pixel translation to a few hundredths of
 // a pixel, also under a brightness offset; flat patches and patches leaving
 // the image fail.
+// The height of a kappa peak read between pixels: the sample at the integer
+// maximum under-reads a sharp peak that falls half a pixel away; the value of
+// the fitted quadratic must not (the tracker compares peak heights frame to frame).
+TEST(Curvature, SubpixelPeakHeightIndependentOfPhase) {
+  cv::Mat k(21, 21, CV_32FC1);
+  const double s = 1.2, height = 10.0;
+  for (double ox : {0.0, 0.3, 0.45}) {
+    for (int y = 0; y < k.rows; ++y) {
+      for (int x = 0; x < k.cols; ++x) {
+        const double dx = x - (10.0 + ox), dy = y - (10.0 - 0.5 * ox);
+        k.at<float>(y, x) = static_cast<float>(-height * std::exp(-(dx * dx + dy * dy) / (2 * s * s)));
+      }
+    }
+    float peak = 0.f;
+    const Eigen::Vector2f p = vt::refineSubpixel(k, Eigen::Vector2i(10, 10), -1.f, &peak);
+    EXPECT_NEAR(p.x(), 10.0 + ox, 0.1);
+    const double sample = -k.at<float>(10, 10);
+    EXPECT_NEAR(peak, height, 0.03 * height) << "offset " << ox;
+    EXPECT_LE(std::fabs(peak - height), 0.5 * std::fabs(sample - height) + 1e-3) << "offset " << ox;
+    if (ox > 0.4) EXPECT_LT(sample, 0.93 * height);  // the sample alone falls short
+  }
+}
+
 TEST(PatchAlign, RecoversSubpixelTranslationUnderBrightnessOffset) {
   const int w = 160, h = 120;
   const auto blobs = randomBlobs(300, w, h, 21);
@@ -343,6 +366,7 @@ TEST(DenseTracker, PatchFilterReducesJitterOnNoisyImages) {
   on.brief_scale = 1.0 / 3.0;
   on.brief_patch_size = 11;
   on.extremum_weight = 0.5;
+  on.max_align_disagreement_px = 0.0;  // the filter alone: the confirmation has its own test
   vt::TrackerConfig off = on;
   off.extremum_weight = 1.0;
   std::vector<double> e_on, e_off;
@@ -356,6 +380,73 @@ TEST(DenseTracker, PatchFilterReducesJitterOnNoisyImages) {
   EXPECT_GT(bad(e_off), 0.02);
   EXPECT_LT(bad(e_on), 0.5 * bad(e_off));
   EXPECT_LT(e_on[e_on.size() * 95 / 100], e_off[e_off.size() * 95 / 100]);
+}
+
+// The confirmation by patch alignment (max_align_disagreement_px): on noisy
+// images some climbs land on a neighbouring extremum; the patch, aligned from
+// the flow prediction, disagrees with them and they end. Fewer steps off by
+// more than 1 px (none here with the default patch filter, so: not more), most
+// tracks kept, and the lost ones are counted as "unconfirmed". On an unrelated second image the climb still finds extrema
+// near every prediction: the confirmation must end nearly all of those tracks.
+TEST(DenseTracker, PatchConfirmationEndsJumpedTracks) {
+  const int w = 320, h = 240;
+  const auto blobs = randomBlobs(700, w, h, 17);
+  const Eigen::Vector2d t(2.3, -1.4);
+  auto noisy = [&](const cv::Mat& img, unsigned seed) {
+    cv::Mat f, noise(h, w, CV_32F);
+    cv::theRNG().state = seed;
+    cv::randn(noise, 0.0, 8.0);
+    img.convertTo(f, CV_32F);
+    f += noise;
+    f.convertTo(f, CV_8U);
+    return f;
+  };
+  const cv::Mat i0 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 1);
+  const cv::Mat i1 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 2);
+  const cv::Mat other = noisy(renderBlobs(randomBlobs(700, w, h, 99), w, h, Eigen::Matrix2d::Identity(),
+                                          Eigen::Vector2d::Zero()), 3);
+  struct Result {
+    std::vector<double> err;
+    int tracked = 0, unconfirmed = 0;
+  };
+  auto run = [&](const vt::TrackerConfig& cfg, const cv::Mat& second) {
+    Result r;
+    vt::DenseTracker tracker(cfg);
+    const auto f0 = tracker.track(i0, 0.0);
+    const auto f1 = tracker.track(second, 0.05);
+    std::map<std::uint64_t, Eigen::Vector2f> before;
+    for (const auto& p : f0.points) before[p.id] = p.uv;
+    for (const auto& p : f1.points) {
+      if (p.age > 0) r.err.push_back((p.uv.cast<double>() - (before[p.id].cast<double>() + t)).norm());
+    }
+    r.tracked = f1.num_tracked;
+    const auto it = f1.lost_by.find("unconfirmed");
+    r.unconfirmed = it == f1.lost_by.end() ? 0 : it->second;
+    return r;
+  };
+  vt::TrackerConfig on;
+  on.brief_scale = 1.0 / 3.0;
+  on.brief_patch_size = 11;
+  on.max_align_disagreement_px = 0.75;
+  vt::TrackerConfig off = on;
+  off.max_align_disagreement_px = 0.0;
+  const Result r_on = run(on, i1), r_off = run(off, i1);
+  ASSERT_GT(r_off.tracked, 200);
+  auto bad = [](const std::vector<double>& e) {
+    return static_cast<double>(std::count_if(e.begin(), e.end(), [](double x) { return x > 1.0; })) / e.size();
+  };
+  EXPECT_LE(bad(r_on.err), bad(r_off.err));
+  EXPECT_GT(r_on.tracked, 0.8 * r_off.tracked);
+  EXPECT_GT(r_on.unconfirmed, 0);
+  EXPECT_EQ(r_off.unconfirmed, 0);
+  // Unrelated content: the climbs alone keep some tracks, the confirmation almost none.
+  const Result u_on = run(on, other), u_off = run(off, other);
+  EXPECT_GT(u_off.tracked, 10);
+  EXPECT_LT(u_on.tracked, 0.25 * u_off.tracked);
+  // Suspended when the patch fails for more than the allowed fraction of the tracks.
+  vt::TrackerConfig suspended = on;
+  suspended.confirm_max_unaligned_fraction = 0.0;
+  EXPECT_EQ(run(suspended, other).tracked, u_off.tracked);
 }
 
 TEST(Brief, DistanceUnchangedByBrightnessOffset) {

@@ -49,7 +49,10 @@ bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const Cl
 
 // Sub-pixel position of the extremum at integer p: separable parabola fit of
 // sign*kappa over the 3x3 neighbourhood; the offset is clamped to +-0.5 px.
-Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign);
+// `peak` (optional) receives sign*kappa of the fitted quadratic at that
+// position: the height of the peak independent of where it falls between
+// pixels (the sample at p under-reads a peak that falls between pixels).
+Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign, float* peak = nullptr);
 
 // How well the extremum at integer p is localized: the flatter principal
 // curvature of sign*kappa (the larger eigenvalue of its 3x3 Hessian, negated)

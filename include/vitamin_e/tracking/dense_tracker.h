@@ -9,7 +9,8 @@
 // sign, w = 1 - rho) to a local maximum, refined to sub-pixel precision and
 // checked forward-backward on the previous curvature image; the reported
 // position is filtered with a patch alignment of the pre-smoothed images (see
-// extremum_weight); (4) new extrema are
+// extremum_weight), which must also confirm the climbed extremum (see
+// max_align_disagreement_px); (4) new extrema are
 // spawned in grid cells that lost their points. Curvature is normalized by a
 // robust per-frame scale (median |kappa|) so that lambda and the thresholds mean
 // the same under exposure changes.
@@ -60,12 +61,18 @@ struct TrackerConfig {
   double max_curvature_ratio = 1.5; // ... or when its normalized |kappa| changes by more than this factor (>= 1)
   double min_track_sharpness = 0.05;// ... or when the peak it climbed to has peakSharpness() below this [1/px^2]:
                                     // a ridge or plateau of kappa lets the position slide (0 = off)
-  double extremum_weight = 0.5;     // (0, 1]: reported position = x_p + w * (extremum - x_p), x_p = the previous
+  double extremum_weight = 0.3;     // (0, 1]: reported position = x_p + w * (extremum - x_p), x_p = the previous
                                     // position carried over by patch alignment on the smoothed images (a
                                     // complementary filter: the extremum anchors against drift, the patch
                                     // removes its frame-to-frame jitter); 1 = the extremum alone (off)
-  int align_radius_px = 3;          // patch of that alignment: (2r+1)^2 px, r in [1, 4]
+  int align_radius_px = 4;          // patch of that alignment: (2r+1)^2 px, r in [1, 4]
   int align_iterations = 2;         // its Gauss-Newton steps (>= 1)
+  double max_align_disagreement_px = 1.0;   // confirmation: a track dies when that patch alignment (started
+                                    // from the flow prediction, independent of the climb) fails or ends farther
+                                    // than this from the climbed extremum [px]: the climb jumped to a neighbouring
+                                    // extremum (0 = off; needs extremum_weight < 1)
+  double confirm_max_unaligned_fraction = 1.0;  // [0, 1]: that check is skipped on a frame where the patch
+                                    // alignment fails for more than this fraction of the tracks (1 = never)
   bool refine_flow = true;          // refit A, b to the tracked points (GM, down to 1 px) and track again from it
   bool predict_parallax = true;     // add each point's last residual to the dominant flow (x_bar = A x + b + r)
   // --- execution ---
@@ -91,6 +98,13 @@ struct TrackerFrame {
   bool flow_ok = false;              // the affine fit had >= flow_min_matches inliers
   int flow_matches = 0;              // BRIEF matches used by the fit (after cross-check/ratio)
   int num_tracked = 0, num_new = 0, num_lost = 0;
+  // num_lost by the check that ended the track: "climb" (no local maximum of F
+  // near the prediction), "weak" (below min_track_curvature), "strength_change"
+  // (max_curvature_ratio), "flat" (min_track_sharpness), "back_climb" and
+  // "forward_backward" (the backward climb), "unconfirmed" (max_align_disagreement_px),
+  // "duplicate" (two tracks on a pixel).
+  std::map<std::string, int> lost_by;
+  std::map<std::string, int> lost_new_by;  // the part of lost_by that was detected in the previous frame
   double noise_ratio = 0;            // estimated image noise sigma / median |gradient| of this frame
   double smoothing_sigma = 0;        // pre-smoothing used for this frame [px]
   std::map<std::string, double> timing_ms;  // "curvature", "flow", "track", "detect", "total"
