@@ -44,6 +44,7 @@ struct Sample {
   double seq_min = 0.0;
   double rss_mb = 0.0;
   std::size_t map_points = 0;
+  std::size_t dormant = 0;  // retired points kept for map reuse (a FIFO capped by map.max_dormant_landmarks)
   std::size_t trajectory = 0;
   double trajectory_mb = 0.0;  // the trajectory's buffer: capacity x entry (+ heap stamp strings)
   int init_retries = 0;
@@ -134,13 +135,13 @@ int main(int argc, char** argv) {
   ve::pipeline::System system(config, camera);
 
   std::printf("# soak: %dx%d, %.0f Hz%s, lap %.1f s, %.1f wall minutes, sample every %d frames, archive voxel %.3f, "
-              "archive cap %zu points\n",
+              "archive cap %zu points, dormant cap %zu points\n",
               width, height, seq.rate_hz, realtime ? " paced in real time" : "", lap_s, minutes, sample_every,
-              archive_voxel, config.map.max_archive_points);
+              archive_voxel, config.map.max_archive_points, config.map.max_dormant_landmarks);
   std::printf("# scene built in %.1f s; RSS at start %.1f MB\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t_scene).count(), rssMb());
-  std::printf("%8s %9s %9s %9s %10s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts",
-              "traj", "retries", "ms/frame");
+  std::printf("%8s %9s %9s %9s %10s %8s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts",
+              "dormant", "traj", "retries", "ms/frame");
   std::fflush(stdout);
 
   std::vector<Sample> samples;
@@ -171,6 +172,7 @@ int main(int argc, char** argv) {
       smp.seq_min = (frame + 1) / seq.rate_hz / 60.0;
       smp.rss_mb = rssMb();
       smp.map_points = system.mapPoints().size();
+      smp.dormant = system.dormantMapPoints();
       const auto& tr = system.trajectory();
       smp.trajectory = tr.size();
       double traj_bytes = static_cast<double>(tr.capacity()) * sizeof(ve::pipeline::TrajectoryEntry);
@@ -183,9 +185,9 @@ int main(int argc, char** argv) {
       smp.ms_per_frame = std::chrono::duration<double, std::milli>(now - last_sample_time).count() / since;
       last_sample_time = now;
       samples.push_back(smp);
-      std::printf("%8llu %9.2f %9.2f %9.2f %10zu %10zu %8d %9.1f\n", static_cast<unsigned long long>(smp.frame),
-                  smp.wall_min, smp.seq_min, smp.rss_mb, smp.map_points, smp.trajectory, smp.init_retries,
-                  smp.ms_per_frame);
+      std::printf("%8llu %9.2f %9.2f %9.2f %10zu %8zu %10zu %8d %9.1f\n", static_cast<unsigned long long>(smp.frame),
+                  smp.wall_min, smp.seq_min, smp.rss_mb, smp.map_points, smp.dormant, smp.trajectory,
+                  smp.init_retries, smp.ms_per_frame);
       std::fflush(stdout);
     }
     if (done) break;
@@ -201,19 +203,23 @@ int main(int argc, char** argv) {
   // with the growth the design allows shown next to it: the trajectory's buffer
   // (one TrajectoryEntry per tracked frame; it grows by doubling, and glibc keeps
   // the old buffer as free heap, so RSS steps with its capacity) and one archived
-  // point per new voxel.
-  std::vector<double> x, y, ym, yt;
+  // point per new voxel, and the dormant points kept for reuse until their cap.
+  std::vector<double> x, y, ym, yt, yd;
   for (std::size_t i = samples.size() / 2; i < samples.size(); ++i) {
     x.push_back(samples[i].wall_min);
     y.push_back(samples[i].rss_mb);
     ym.push_back(static_cast<double>(samples[i].map_points));
     yt.push_back(samples[i].trajectory_mb);
+    yd.push_back(static_cast<double>(samples[i].dormant));
   }
   const double rss_slope = slope(x, y);              // MB per wall minute
   const double points_slope = slope(x, ym);          // map points per wall minute
   const double traj_mb_per_min = slope(x, yt);
   const double points_mb_per_min = points_slope * 64.0 / (1024.0 * 1024.0);  // ~64 B per point (archive + voxel index)
-  const double unexplained = rss_slope - traj_mb_per_min - std::max(0.0, points_mb_per_min);
+  // A dormant point: the struct plus the deque's share of its blocks.
+  const double dormant_mb_per_min = slope(x, yd) * (sizeof(ve::map::DormantLandmark) + 8.0) / (1024.0 * 1024.0);
+  const double unexplained =
+      rss_slope - traj_mb_per_min - std::max(0.0, points_mb_per_min) - std::max(0.0, dormant_mb_per_min);
   const double rss_end = samples.back().rss_mb;
   const double span_min = x.empty() ? 0.0 : x.back() - x.front();
   // Flat: the second half grew by less than max(1 MB, 1 % of RSS).
@@ -227,14 +233,15 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(tracked), 100.0 * tracked / frames, system.initRetries(),
               static_cast<unsigned long long>(nonfinite), max_step);
   std::printf("# RSS: start %.1f MB, second-half start %.1f MB, end %.1f MB; second-half slope %.3f MB/min "
-              "(trajectory growth %.3f MB/min, map points %+.0f /min ~ %.3f MB/min, unexplained %.3f MB/min)\n",
+              "(trajectory growth %.3f MB/min, map points %+.0f /min ~ %.3f MB/min, dormant points %.3f MB/min, "
+              "unexplained %.3f MB/min)\n",
               samples.front().rss_mb, y.empty() ? 0.0 : y.front(), rss_end, rss_slope, traj_mb_per_min,
-              points_slope, points_mb_per_min, unexplained);
+              points_slope, points_mb_per_min, dormant_mb_per_min, unexplained);
   std::printf("# verdict: %s (second half: %+.2f MB over %.1f min)\n",
               !enough     ? "too few samples for a verdict (run longer or sample more often)"
               : flat      ? "memory FLAT after warm-up"
-              : explained ? "memory GROWING after warm-up, as designed (trajectory + map archive, bounded by "
-                            "map.max_archive_points)"
+              : explained ? "memory GROWING after warm-up, as designed (trajectory + map archive and dormant "
+                            "points, bounded by map.max_archive_points and map.max_dormant_landmarks)"
                           : "memory GROWING after warm-up beyond the trajectory and the map archive (leak?)",
               growth_mb, span_min);
   std::printf("{\"frames\": %llu, \"wall_minutes\": %.2f, \"tracked\": %llu, \"init_retries\": %d, "

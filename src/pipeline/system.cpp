@@ -198,6 +198,7 @@ std::vector<MapPoint3> System::mapPoints() const {
 std::size_t System::framesProcessed() const { return impl_->frames_processed; }
 std::size_t System::framesTracked() const { return impl_->frames_tracked; }
 std::size_t System::reusedMapPoints() const { return impl_->reused_points; }
+std::size_t System::dormantMapPoints() const { return impl_->map.dormant().size(); }
 long long System::firstInitFrame() const { return impl_->first_init_frame; }
 std::size_t System::framesTrackedSinceInit() const {
   return impl_->first_init_frame < 0 ? 0 : impl_->frames_tracked - impl_->localized_before_init;

@@ -60,6 +60,8 @@ class System {
   int initRetries() const;
   // Map points taken over by new tracks (map reuse, see SystemConfig::reuse_radius_px).
   std::size_t reusedMapPoints() const;
+  // Retired map points kept for reuse (bounded by map.max_dormant_landmarks).
+  std::size_t dormantMapPoints() const;
   const StageTimings& timings() const;
   const SystemConfig& config() const;
   const camera::Camera& camera() const;
