@@ -116,7 +116,8 @@ void Map::retireKeyframe(const Keyframe& retired) {
 }
 
 void Map::retireLandmark(const Landmark& l) {
-  archive(l);
+  // A revived landmark was archived when it first retired: no second copy.
+  if (!l.revived) archive(l);
   if (config_.max_dormant_landmarks == 0 || l.num_observations < config_.min_observations_to_archive ||
       !l.p_w.allFinite()) {
     return;

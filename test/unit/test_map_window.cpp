@@ -128,15 +128,23 @@ TEST(Map, RetiredLandmarksStayDormantUpToTheirCapAndCanBeRevived) {
   EXPECT_EQ(from_kf3, 20);
   // Revived under a new track id: active again, flagged, with its old position.
   const double x = map.dormant().back().p_w.x();
-  ASSERT_TRUE(map.reviveDormant(29, 7777, 42));
+  ASSERT_TRUE(map.reviveDormant(29, 7777, 5));
   const auto* l = map.landmark(7777);
   ASSERT_NE(l, nullptr);
   EXPECT_TRUE(l->revived);
   EXPECT_EQ(l->p_w.x(), x);
-  EXPECT_EQ(l->last_seen_frame, 42u);
+  EXPECT_EQ(l->last_seen_frame, 5u);
   EXPECT_TRUE(map.dormant().back().revived);
-  EXPECT_FALSE(map.reviveDormant(29, 7778, 42));  // already taken
-  EXPECT_FALSE(map.reviveDormant(28, 500, 42));   // the id is an active landmark
+  EXPECT_FALSE(map.reviveDormant(29, 7778, 5));  // already taken
+  EXPECT_FALSE(map.reviveDormant(28, 500, 5));   // the id is an active landmark
+  // Retired again, it goes back to the dormant points but not twice into the archive.
+  const std::size_t archived = map.archive().size();
+  map.addKeyframe(keyframeSeeing(6, 7777, 1));
+  map.addKeyframe(keyframeSeeing(7, 9000, 1));
+  map.addKeyframe(keyframeSeeing(8, 9000, 1));
+  EXPECT_EQ(map.landmark(7777), nullptr);
+  EXPECT_EQ(map.dormant().back().id, 7777u);
+  EXPECT_EQ(map.archive().size(), archived + 40);  // keyframe 4's and 5's landmarks, not 7777
   // A new map (re-initialization) has another scale: nothing dormant survives.
   map.clear();
   EXPECT_TRUE(map.dormant().empty());
