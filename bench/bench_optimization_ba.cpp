@@ -3,10 +3,13 @@
 // re-optimization in a sliding 10-camera window. Both solvers get the same problem, the same
 // Geman-McClure loss, analytic Jacobians (the same formulas) and the same relative cost
 // tolerance; costs are reported with baCost (sum of rho in px^2).
-//   bench_optimization_ba [--quick] [--no-ceres] [--threads N] [--free-cams K] [--frames F]
+//   bench_optimization_ba [--quick] [--no-ceres] [--threads N] [--threads2 M] [--free-cams K] [--frames F]
 //                         [--point-iterations P] [--point-extrapolation E] [--point-tolerance T]
+// Subspace GN also runs to the tolerance with M threads (default 2; 0 = skip) on the same
+// problems, right after the N-thread run: the "*_2threads" / "*_mt" fields.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <cstdio>
 #include <cstring>
@@ -40,6 +43,7 @@ struct Args {
   bool quick = false;
   bool no_ceres = false;
   int threads = 1;
+  int threads2 = 2;  // second subspace-GN run to the tolerance with this many threads (0: none)
   int free_cams = 3;
   int frames = 5;
   // Per-point refinement after each sweep (BaOptions): 2 Gauss-Newton steps per point, each
@@ -64,6 +68,8 @@ struct Result {
 struct Row {
   int cams = 0, points = 0, obs = 0, frames = 0;
   Result sgn, sgn_budget, ceres_sparse, ceres_dense;  // sgn_budget: max_sweeps = 5
+  Result sgn_mt, sgn_budget_mt;                        // the same with Args::threads2 threads
+  double max_cost_diff_mt = 0.0;  // max over frames of |cost(threads2) - cost(threads)| / cost(threads)
   double init_cost = 0, init_err = 0;
   const Result& ceres() const { return ceres_dense.ms < ceres_sparse.ms ? ceres_dense : ceres_sparse; }
 };
@@ -81,20 +87,27 @@ void solveBoth(const BaProblem& start, const BaProblem& truth, const Args& a, Ro
   o.point_extrapolation = a.point_extrapolation;
   o.point_tolerance = a.point_tolerance;
   BaProblem sgn;
-  for (int budget = 0; budget < 2; ++budget) {
+  double cost_1[2] = {0.0, 0.0};
+  for (int run = 0; run < (a.threads2 > 0 ? 4 : 2); ++run) {
+    const int budget = run % 2;
+    const bool mt = run >= 2;
     BaProblem b = start;
     BaOptions ob = o;
     if (budget) ob.max_sweeps = 5;
-    Result& r = budget ? row->sgn_budget : row->sgn;
+    if (mt) ob.threads = a.threads2;
+    Result& r = mt ? (budget ? row->sgn_budget_mt : row->sgn_mt) : (budget ? row->sgn_budget : row->sgn);
     const double t0 = nowMs(), c0 = cpuMs();
     const BaSummary sum = solveSubspaceGaussNewton(b, ob);
     r.ms += nowMs() - t0;
     r.cpu_ms += cpuMs() - c0;
     r.iters += sum.sweeps;
     r.rejects += sum.rejected_steps;
-    r.cost += baCost(b, o.robust_sigma_px);
+    const double cost = baCost(b, o.robust_sigma_px);
+    r.cost += cost;
     r.err += cameraPositionRmse(b, truth, mask);
-    if (!budget) sgn = b;
+    if (!mt) cost_1[budget] = cost;
+    else row->max_cost_diff_mt = std::max(row->max_cost_diff_mt, std::abs(cost - cost_1[budget]) / cost_1[budget]);
+    if (!budget && !mt) sgn = b;
   }
   row->init_cost += baCost(start, o.robust_sigma_px);
   row->init_err += cameraPositionRmse(start, truth, mask);
@@ -232,7 +245,7 @@ Row runIncremental(int window_points, const Args& a) {
     store(out, first, pt_ids);
   }
   row.frames = F;
-  for (Result* r : {&row.sgn, &row.sgn_budget, &row.ceres_sparse, &row.ceres_dense}) {
+  for (Result* r : {&row.sgn, &row.sgn_budget, &row.ceres_sparse, &row.ceres_dense, &row.sgn_mt, &row.sgn_budget_mt}) {
     r->ms /= F; r->cpu_ms /= F; r->cost /= F; r->err /= F;
   }
   row.points /= F;
@@ -251,19 +264,25 @@ void printRow(const char* kind, const Row& r) {
               r.cams, r.points, r.obs, r.sgn.ms, double(r.sgn.iters) / r.frames, r.sgn.cost, r.sgn.err,
               r.ceres_sparse.ms, r.ceres_dense.ms, double(c.iters) / r.frames, c.cost, c.err, c.ms / r.sgn.ms,
               r.sgn.cost / c.cost - 1.0);
+  if (r.sgn_mt.iters > 0)
+    std::printf("%-6s %4d %6d %7d | %9.1f %5.1f %12.2f %9.2e |  (to the tolerance, more threads; max5: %.1f ms) cost diff %.1e\n",
+                " sgnMT", r.cams, r.points, r.obs, r.sgn_mt.ms, double(r.sgn_mt.iters) / r.frames, r.sgn_mt.cost,
+                r.sgn_mt.err, r.sgn_budget_mt.ms, r.max_cost_diff_mt);
 }
 
 std::string jsonRow(const Row& r, bool batch) {
   const Result& c = r.ceres();
-  char buf[1024];
+  char buf[1536];
   std::snprintf(buf, sizeof(buf),
                 "{%s\"points\":%d,\"sgn_ms\":%.3f,\"ceres_ms\":%.3f,\"sgn_cost\":%.6f,\"ceres_cost\":%.6f,"
                 "\"sgn_cam_err\":%.3e,\"ceres_cam_err\":%.3e,\"ceres_sparse_ms\":%.3f,\"ceres_dense_ms\":%.3f,"
-                "\"sgn5_ms\":%.3f,\"sgn5_cost\":%.6f,\"sgn5_cam_err\":%.3e,\"init_cost\":%.6f,\"sgn_sweeps\":%.1f,\"sgn_rejected\":%.1f,\"sgn_cpu_ms\":%.3f,\"ceres_cpu_ms\":%.3f,\"sgn5_cpu_ms\":%.3f}",
+                "\"sgn5_ms\":%.3f,\"sgn5_cost\":%.6f,\"sgn5_cam_err\":%.3e,\"init_cost\":%.6f,\"sgn_sweeps\":%.1f,\"sgn_rejected\":%.1f,\"sgn_cpu_ms\":%.3f,\"ceres_cpu_ms\":%.3f,\"sgn5_cpu_ms\":%.3f,"
+                "\"sgn_mt_ms\":%.3f,\"sgn_mt_cpu_ms\":%.3f,\"sgn_mt_cost\":%.6f,\"sgn_mt_sweeps\":%.1f,\"sgn5_mt_ms\":%.3f,\"sgn_mt_max_cost_rel_diff\":%.3e}",
                 batch ? ("\"cams\":" + std::to_string(r.cams) + ",").c_str() : "", r.points, r.sgn.ms, c.ms,
                 r.sgn.cost, c.cost, r.sgn.err, c.err, r.ceres_sparse.ms, r.ceres_dense.ms, r.sgn_budget.ms,
                 r.sgn_budget.cost, r.sgn_budget.err, r.init_cost, double(r.sgn.iters) / r.frames,
-                double(r.sgn.rejects) / r.frames, r.sgn.cpu_ms, c.cpu_ms, r.sgn_budget.cpu_ms);
+                double(r.sgn.rejects) / r.frames, r.sgn.cpu_ms, c.cpu_ms, r.sgn_budget.cpu_ms, r.sgn_mt.ms,
+                r.sgn_mt.cpu_ms, r.sgn_mt.cost, double(r.sgn_mt.iters) / r.frames, r.sgn_budget_mt.ms, r.max_cost_diff_mt);
   return buf;
 }
 
@@ -273,9 +292,9 @@ int runAll(const Args& a) {
 #endif
   const std::vector<int> batch_sizes = a.quick ? std::vector<int>{1000} : std::vector<int>{1000, 5000, 20000, 50000};
   const std::vector<int> inc_sizes = a.quick ? std::vector<int>{5000} : std::vector<int>{5000, 20000};
-  std::printf("# threads=%d, point_iterations=%d, point_extrapolation=%d, point_tolerance=%g, incremental: free newest "
+  std::printf("# threads=%d (sgnMT rows and *_mt / *_2threads fields: %d threads), point_iterations=%d, point_extrapolation=%d, point_tolerance=%g, incremental: free newest "
               "%d cameras of a 10-camera window, %d frames\n",
-              a.threads, a.point_iterations, a.point_extrapolation, a.point_tolerance, a.free_cams, a.frames);
+              a.threads, a.threads2, a.point_iterations, a.point_extrapolation, a.point_tolerance, a.free_cams, a.frames);
   std::printf("%-6s %4s %6s %7s | %9s %5s %12s %9s | %9s %9s %4s %12s %9s | %7s %8s\n", "kind", "cams", "points",
               "obs", "sgn_ms", "sweep", "sgn_cost", "sgn_err", "csparse", "cdense", "it", "ceres_cost", "ceres_err",
               "speedup", "cost_rel");
@@ -287,6 +306,7 @@ int runAll(const Args& a) {
     std::fflush(stdout);
   }
   double ms_per_frame = 0.0, cpu_per_frame = 0.0, ms_budget = 0.0;  // first incremental size
+  double ms_mt = 0.0, cpu_mt = 0.0, ms_budget_mt = 0.0, diff_mt = 0.0;
   for (int n : inc_sizes) {
     const Row r = runIncremental(n, a);
     printRow("incr", r);
@@ -295,14 +315,23 @@ int runAll(const Args& a) {
       ms_per_frame = r.sgn.ms;
       cpu_per_frame = r.sgn.cpu_ms;
       ms_budget = r.sgn_budget.ms;
+      ms_mt = r.sgn_mt.ms;
+      cpu_mt = r.sgn_mt.cpu_ms;
+      ms_budget_mt = r.sgn_budget_mt.ms;
+      diff_mt = r.max_cost_diff_mt;
     }
     std::fflush(stdout);
   }
   // incremental_ms_per_frame: subspace GN run to the tolerance (max 20 sweeps), wall clock, on
-  // the 5k-point window; the 5-sweep budget is reported separately.
+  // the 5k-point window; the 5-sweep budget is reported separately. *_2threads: the same
+  // solves with Args::threads2 threads (the key keeps its name for --threads2 other than 2).
   std::printf("{\"batch\":[%s],\"incremental\":[%s],\"incremental_ms_per_frame\":%.3f,"
-              "\"incremental_cpu_ms_per_frame\":%.3f,\"incremental_ms_per_frame_max5_sweeps\":%.3f}\n",
-              jb.c_str(), ji.c_str(), ms_per_frame, cpu_per_frame, ms_budget);
+              "\"incremental_cpu_ms_per_frame\":%.3f,\"incremental_ms_per_frame_max5_sweeps\":%.3f,"
+              "\"threads\":%d,\"threads2\":%d,\"incremental_ms_per_frame_2threads\":%.3f,"
+              "\"incremental_cpu_ms_per_frame_2threads\":%.3f,\"incremental_ms_per_frame_max5_sweeps_2threads\":%.3f,"
+              "\"incremental_cost_rel_diff_2threads\":%.3e}\n",
+              jb.c_str(), ji.c_str(), ms_per_frame, cpu_per_frame, ms_budget, a.threads, a.threads2, ms_mt, cpu_mt,
+              ms_budget_mt, diff_mt);
   return 0;
 }
 
@@ -314,13 +343,14 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--quick")) a.quick = true;
     else if (!std::strcmp(argv[i], "--no-ceres")) a.no_ceres = true;
     else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) a.threads = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--threads2") && i + 1 < argc) a.threads2 = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--free-cams") && i + 1 < argc) a.free_cams = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) a.frames = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--point-iterations") && i + 1 < argc) a.point_iterations = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--point-extrapolation") && i + 1 < argc) a.point_extrapolation = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--point-tolerance") && i + 1 < argc) a.point_tolerance = std::atof(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: %s [--quick] [--no-ceres] [--threads N] [--free-cams K] [--frames F] [--point-iterations P] "
+      std::fprintf(stderr, "usage: %s [--quick] [--no-ceres] [--threads N] [--threads2 M] [--free-cams K] [--frames F] [--point-iterations P] "
                    "[--point-extrapolation E] [--point-tolerance T]\n", argv[0]);
       return 2;
     }

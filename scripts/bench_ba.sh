@@ -3,7 +3,7 @@
 # (1 px noise, 5% outliers, Geman-McClure sigma 2 px, relative cost tolerance 1e-6 for both):
 # batch 10 cameras x {1k,5k,20k,50k} points from a perturbed start, and incremental
 # per-frame re-optimization in a sliding 10-camera window holding ~{5k,20k} points.
-#   ./scripts/bench_ba.sh [--quick] [--no-ceres] [--threads N] [--free-cams K] [--frames F] [--point-iterations P]
+#   ./scripts/bench_ba.sh [--quick] [--no-ceres] [--threads N] [--threads2 M] [--free-cams K] [--frames F] [--point-iterations P]
 #                         [--point-extrapolation E] [--point-tolerance T]
 # Last line of the output: JSON summary. Wall-clock ms (and process CPU ms, which stays
 # meaningful on a loaded machine) per solve; for incremental rows, means per frame.

@@ -29,6 +29,98 @@ void BaOptions::validate() const {
 namespace detail {
 
 namespace {
+constexpr double kSpinUs = 100.0;  // a worker spins this long for the next loop before sleeping
+constexpr int kChunksPerThread = 8;  // chunks per parallel loop and thread (< 2^16 in all)
+inline void cpuRelax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
+}  // namespace
+
+WorkerPool::WorkerPool(int threads) : n_(std::max(1, threads)) {
+  workers_.reserve(n_ - 1);
+  for (int t = 1; t < n_; ++t) workers_.emplace_back([this] { loop(); });
+}
+
+WorkerPool::~WorkerPool() {
+  stop_.store(true);
+  state_.store(static_cast<std::uint64_t>(++gen_) << 32);
+  {
+    std::lock_guard<std::mutex> lock(m_);
+  }
+  cv_.notify_all();
+  for (auto& w : workers_) w.join();
+}
+
+void WorkerPool::dispatch(int chunks) {
+  done_.store(0, std::memory_order_relaxed);
+  const std::uint64_t v = (static_cast<std::uint64_t>(++gen_) << 32) | (static_cast<std::uint64_t>(chunks) << 16);
+  state_.store(v);  // seq_cst, against sleepers_ below (a sleeping worker sees v or is woken)
+  if (sleepers_.load() > 0) {
+    { std::lock_guard<std::mutex> lock(m_); }
+    cv_.notify_all();
+  }
+  work(v);
+  for (int spin = 0; done_.load(std::memory_order_acquire) != chunks; ++spin) {
+    if (spin < 4096) cpuRelax();
+    else std::this_thread::yield();  // a worker holding a chunk was descheduled
+  }
+}
+
+void WorkerPool::work(std::uint64_t v) {
+  const std::uint32_t gen = static_cast<std::uint32_t>(v >> 32);
+  const int chunks = static_cast<int>((v >> 16) & 0xffff);
+  for (;;) {
+    if (static_cast<std::uint32_t>(v >> 32) != gen || static_cast<int>(v & 0xffff) >= chunks) return;
+    // The claim compares the whole state: it only succeeds for a chunk of this job while the job
+    // is running (the caller moves on only when every chunk is done), so fn_/ctx_ are this job's.
+    if (state_.compare_exchange_weak(v, v + 1, std::memory_order_acq_rel, std::memory_order_acquire)) {
+      fn_(ctx_, static_cast<int>(v & 0xffff));
+      done_.fetch_add(1, std::memory_order_acq_rel);
+      v = state_.load(std::memory_order_acquire);
+    }
+  }
+}
+
+void WorkerPool::loop() {
+  std::uint32_t seen = 0;
+  for (;;) {
+    std::uint64_t v = state_.load(std::memory_order_acquire);
+    if (static_cast<std::uint32_t>(v >> 32) == seen) {
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int spin = 0; static_cast<std::uint32_t>((v = state_.load(std::memory_order_acquire)) >> 32) == seen; ++spin) {
+        cpuRelax();
+        if ((spin & 63) != 63 ||
+            std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() < kSpinUs)
+          continue;
+        std::unique_lock<std::mutex> lock(m_);
+        sleepers_.fetch_add(1);
+        cv_.wait(lock, [&] { return static_cast<std::uint32_t>(state_.load() >> 32) != seen; });
+        sleepers_.fetch_sub(1);
+      }
+    }
+    seen = static_cast<std::uint32_t>(v >> 32);
+    if (stop_.load()) return;
+    work(v);
+  }
+}
+
+std::vector<int> weightedSplit(const std::vector<double>& prefix, int T) {
+  const int n = static_cast<int>(prefix.size()) - 1;
+  std::vector<int> b(T + 1, n);
+  b[0] = 0;
+  for (int t = 1; t < T; ++t) {
+    const double target = prefix[n] * t / T;
+    b[t] = static_cast<int>(std::lower_bound(prefix.begin(), prefix.end(), target) - prefix.begin());
+    b[t] = std::max(b[t - 1], std::min(b[t], n));
+  }
+  return b;
+}
+
+namespace {
 
 // S += Jl^T M Jr for two camera-row pairs (2x6, column-major). Column 0 of a camera row pair
 // is (A, 0) and column 1 is (0, C) (pinhole Jacobian times [I | -[p_c]x]; all zero behind the
@@ -48,6 +140,18 @@ SubspaceGn::SubspaceGn(BaProblem& p, const BaOptions& o) : P_(p), O_(o), kernel_
   K_.cx = p.cx;
   K_.cy = p.cy;
   buildStructure();
+  const int npf = freePoints();
+  T_ = std::max(1, std::min(O_.threads, npf / 256));
+  std::vector<double> w_obs(npf + 1, 0.0), w_schur(npf + 1, 0.0);
+  for (int j = 0; j < npf; ++j) {
+    const double k = slot_begin_[j + 1] - slot_begin_[j];
+    w_obs[j + 1] = w_obs[j] + 1.0 + (pt_begin_[j + 1] - pt_begin_[j]);
+    w_schur[j + 1] = w_schur[j] + 1.0 + k * (k + 1.0) / 2.0;
+  }
+  chunks_ = T_ > 1 ? kChunksPerThread * T_ : 1;
+  split_obs_ = weightedSplit(w_obs, chunks_);
+  split_schur_ = weightedSplit(w_schur, chunks_);
+  if (T_ > 1) pool_.reset(new WorkerPool(T_));
 }
 
 void SubspaceGn::run(int* sweeps, bool* converged, double* lambda_out) {
@@ -110,7 +214,7 @@ void SubspaceGn::solveStep(double lambda) {
   // With H_cp,ij = Jc_ij^T Wjp_ij (two residual rows), a point's term for the camera pair (i, l)
   // is Jc_ij^T M Jc_lj with the 2x2 M = Wjp_ij H_pp,j^-1 Wjp_lj^T: accumulated point by point
   // into the upper block triangle (per thread, then summed), then mirrored.
-  const int T = std::max(1, std::min(O_.threads, npf / 256));
+  const int T = chunks_;
   if (schur) {
     S_t_.resize(T);
     b_t_.resize(T);
@@ -119,7 +223,7 @@ void SubspaceGn::solveStep(double lambda) {
       b_t_[t].assign(ncf, Vector6d::Zero());
     }
   }
-  parallelFor(npf, O_.threads, [&](int begin, int end, int t) {
+  forChunks(split_schur_, [&](int begin, int end, int t) {
     BlockMatrix6* S = schur ? &S_t_[t] : nullptr;
     std::vector<Vector6d>* bt = schur ? &b_t_[t] : nullptr;
     for (int j = begin; j < end; ++j) {
@@ -127,7 +231,6 @@ void SubspaceGn::solveStep(double lambda) {
       H.diagonal() = H.diagonal() * (1.0 + lambda) + Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
       const Eigen::Matrix3d Hi = H.inverse();
       Hpp_inv_[j] = Hi;
-      q_[j].setZero();
       dp_[j].setZero();
       if (!schur) continue;
       const Eigen::Vector3d hg = Hi * gp_[j];
@@ -180,11 +283,6 @@ void SubspaceGn::solveStep(double lambda) {
       solveBlockPcg(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
     else
       solveBlockGaussSeidel(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
-    parallelFor(npf, O_.threads, [&](int begin, int end, int) {
-      for (int j = begin; j < end; ++j)
-        for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
-          q_[j].noalias() += Wjp_[s].transpose() * (Jc_[s] * dc_[slot_cam_[s]]);
-    });
     pointUpdates();
     return;
   }
@@ -211,11 +309,14 @@ void SubspaceGn::solveStep(double lambda) {
 }
 
 void SubspaceGn::pointUpdates() {
-  parallelFor(freePoints(), O_.threads, [&](int begin, int end, int) {
+  forChunks(split_obs_, [&](int begin, int end, int) {
     for (int j = begin; j < end; ++j) {
       Eigen::Vector3d rhs = gp_[j];
       if (O_.use_schur) {
-        rhs += q_[j];
+        Eigen::Vector3d q = Eigen::Vector3d::Zero();
+        for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
+          q.noalias() += Wjp_[s].transpose() * (Jc_[s] * dc_[slot_cam_[s]]);
+        rhs += q;
       } else {
         for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s)
           rhs.noalias() += Wjp_[s].transpose() * (Jc_[s] * dc_[slot_cam_[s]]);

@@ -7,6 +7,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <cstdint>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -26,20 +31,48 @@ using Matrix23d = Eigen::Matrix<double, 2, 3>;
 
 constexpr double kMinDepth = 1e-9;
 
-// Runs f(begin, end, thread_index) over [0, n) split in `threads` contiguous chunks.
-template <typename F>
-void parallelFor(int n, int threads, F&& f) {
-  const int t = std::max(1, std::min(threads, n / 256));
-  if (t <= 1) {
-    f(0, n, 0);
-    return;
+// A fixed set of threads for one solve. run(chunks, f) calls f(c) once for every chunk c in
+// [0, chunks) on whichever thread claims it first (the caller takes part) and returns when all
+// are done: a worker that the OS has not scheduled (the 2 cores are shared with the tracker and
+// other processes) only means the caller does more chunks, instead of a barrier waiting for it.
+// Results must not depend on who ran a chunk: callers keep per-chunk partial sums and combine
+// them in chunk order. The workers are created once (a std::thread costs ~50 us to start and a
+// sweep has ~5 parallel loops); between loops they spin for ~kSpinUs, then sleep.
+class WorkerPool {
+ public:
+  explicit WorkerPool(int threads);
+  ~WorkerPool();
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+  int size() const { return n_; }
+  template <typename F>
+  void run(int chunks, F& f) {
+    fn_ = [](void* ctx, int c) { (*static_cast<F*>(ctx))(c); };
+    ctx_ = &f;
+    dispatch(chunks);
   }
-  std::vector<std::thread> pool;
-  pool.reserve(t - 1);
-  for (int k = 1; k < t; ++k) pool.emplace_back([&, k] { f(n * k / t, n * (k + 1) / t, k); });
-  f(0, n / t, 0);
-  for (auto& th : pool) th.join();
-}
+
+ private:
+  // state_: generation (high 32 bits), number of chunks (16 bits), next unclaimed chunk (16 bits).
+  void dispatch(int chunks);
+  void work(std::uint64_t v);  // claims and runs chunks of the job whose state was v
+  void loop();
+  int n_;
+  void (*fn_)(void*, int) = nullptr;
+  void* ctx_ = nullptr;
+  std::uint32_t gen_ = 0;  // caller's copy
+  std::atomic<std::uint64_t> state_{0};
+  std::atomic<int> done_{0};
+  std::atomic<int> sleepers_{0};
+  std::atomic<bool> stop_{false};
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::vector<std::thread> workers_;
+};
+
+// Boundaries b[0] = 0 <= b[1] <= ... <= b[T] = n splitting [0, n) in T contiguous ranges of
+// about equal weight; prefix[k] = total weight of items [0, k) (size n + 1).
+std::vector<int> weightedSplit(const std::vector<double>& prefix, int T);
 
 class SubspaceGn {
  public:
@@ -84,8 +117,30 @@ class SubspaceGn {
   // when the step is accepted they are the first linearization of refinePoints.
   double activeCost();
 
+  // Runs f(begin, end, c) on each chunk c = [split[c], split[c + 1]) of the free points, on the
+  // pool's threads (or f(0, n, 0) without a pool). The chunks are fixed per solve and f keeps
+  // partial sums per chunk, combined in chunk order: the results do not depend on which thread
+  // ran which chunk, and differ from one thread's only by the rounding of those sums.
+  template <typename F>
+  void forChunks(const std::vector<int>& split, F&& f) {
+    if (!pool_) {
+      f(0, split.back(), 0);
+      return;
+    }
+    auto g = [&](int c) { f(split[c], split[c + 1], c); };
+    pool_->run(static_cast<int>(split.size()) - 1, g);
+  }
+
   BaProblem& P_;
   const BaOptions& O_;
+  // Threads used for this solve: 1 below 256 free points per thread (a parallel loop costs a few
+  // microseconds of hand-over, more than the work of a small problem).
+  int T_ = 1;
+  int chunks_ = 1;  // chunks per parallel loop: 1 with one thread, else kChunksPerThread * T_
+  std::unique_ptr<WorkerPool> pool_;
+  // Chunks of free points, balanced by the observations (linearization, costs, refinement)
+  // and by the camera-pair terms of the Schur complement (k(k+1)/2 for k slots).
+  std::vector<int> split_obs_, split_schur_;
   geometry::GemanMcClure kernel_;
   geometry::Pinhole K_;
   std::vector<int> cam_var_, pt_var_, cams_, pts_;
@@ -111,7 +166,7 @@ class SubspaceGn {
   // two columns of R_w_c interleaved, (R00, R01, R10, R11, R20, R21), then its third column
   // (R02, R12, R22) and t_w_c. Row k of [x y]^T = R^T d is then one packed product per d_k.
   std::vector<std::array<double, 12>> cam_pack_;
-  std::vector<Eigen::Vector3d> gp_, dp_, q_, t_, saved_pts_;
+  std::vector<Eigen::Vector3d> gp_, dp_, t_, saved_pts_;
   std::vector<Eigen::Matrix3d> ref_H_;  // activeCost's per-point blocks for refinePoints
   std::vector<Eigen::Vector3d> ref_g_;
   std::vector<double> ref_c_;
@@ -123,9 +178,9 @@ class SubspaceGn {
   std::vector<Matrix23d> Wjp_;
   std::vector<double> slot_w_;  // IRLS weight of the slot's observation
   std::vector<Eigen::Isometry3d> saved_cams_;
-  std::vector<std::vector<Matrix6d>> Hcc_t_;  // per-thread camera blocks (upper triangle)
+  std::vector<std::vector<Matrix6d>> Hcc_t_;  // per-chunk camera blocks (upper triangle)
   std::vector<std::vector<Vector6d>> gc_t_, hdiag_t_;
-  std::vector<BlockMatrix6> S_t_;              // per-thread reduced camera system (threads > 1)
+  std::vector<BlockMatrix6> S_t_;              // per-chunk reduced camera system (upper triangle)
   std::vector<std::vector<Vector6d>> b_t_;
 };
 

@@ -80,7 +80,6 @@ void SubspaceGn::buildStructure() {
   gp_.resize(npf);
   Hpp_inv_.resize(npf);
   dp_.resize(npf);
-  q_.resize(npf);
   Jc_.resize(slot_cam_.size());
   Wjp_.resize(slot_cam_.size());
   slot_w_.resize(slot_cam_.size());
@@ -197,7 +196,7 @@ double SubspaceGn::linearize() {
   const int ncf = freeCameras();
   const int npf = freePoints();
   cacheCameras();
-  const int T = std::max(1, O_.threads);
+  const int T = chunks_;
   // With use_schur the observations of free points enter the camera blocks only through the
   // Schur complement's diagonal blocks, Jc^T (w I - M) Jc (solveStep): here only the diagonal
   // of their H_cc (for the damping) is summed. Free cameras' observations of fixed points
@@ -212,7 +211,7 @@ double SubspaceGn::linearize() {
     hdiag_t_[t].assign(ncf, Vector6d::Zero());
   }
   std::vector<double> cost_t(T, 0.0);
-  parallelFor(npf, T, [&](int begin, int end, int t) {
+  forChunks(split_obs_, [&](int begin, int end, int t) {
     // The two residual rows side by side in 2-wide arrays (as evalPoint; SSE2 on x86-64), the
     // per-point accumulators summed once per point, the rows stored straight into Jc_/Wjp_.
     using A2 = Eigen::Array2d;
@@ -411,9 +410,9 @@ double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& xw, Eigen::Matrix3d* 
 
 double SubspaceGn::refinePoints(int iterations) {
   cacheCameras();
-  const int T = std::max(1, O_.threads);
+  const int T = chunks_;
   std::vector<double> gain_t(T, 0.0);
-  parallelFor(freePoints(), T, [&](int begin, int end, int t) {
+  forChunks(split_obs_, [&](int begin, int end, int t) {
     for (int j = begin; j < end; ++j) {
       Eigen::Vector3d p = P_.points[pts_[j]].p_w;
       double lambda = O_.initial_lambda;
@@ -495,7 +494,7 @@ void SubspaceGn::applyStep() {
 
 double SubspaceGn::activeCost() {
   cacheCameras();
-  const int T = std::max(1, O_.threads);
+  const int T = chunks_;
   const bool keep = O_.point_iterations > 0;
   if (keep) {
     ref_H_.resize(pts_.size());
@@ -503,7 +502,7 @@ double SubspaceGn::activeCost() {
     ref_c_.resize(pts_.size());
   }
   std::vector<double> cost_t(T, 0.0);
-  parallelFor(freePoints(), T, [&](int begin, int end, int t) {
+  forChunks(split_obs_, [&](int begin, int end, int t) {
     double c = 0.0;
     for (int j = begin; j < end; ++j) {
       const Eigen::Vector3d& p = P_.points[pts_[j]].p_w;

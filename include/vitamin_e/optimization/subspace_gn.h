@@ -18,8 +18,7 @@
 //     blocks (default: Gauss-Seidel needs hundreds of passes when a chain of cameras is free).
 //     Without use_schur it is the paper's plain Eq. 11/12 Gauss-Seidel (camera blocks with the
 //     points' current updates, then point blocks), repeated plain_gs_passes times.
-//  3. Point blocks (Eq. 12): each 3x3 update given the camera updates; the points are
-//     independent given the cameras, so this runs on `threads` threads.
+//  3. Point blocks (Eq. 12): each 3x3 update given the camera updates (independent per point).
 //  4. The step is applied (T_w_c <- T_w_c * expSE3(dc), p_w <- p_w + dp) and kept only if the
 //     robust cost decreased; otherwise the LM damping lambda (Marquardt: each block's diagonal
 //     is scaled by 1 + lambda) grows and the step is recomputed from the same linearization.
@@ -30,6 +29,12 @@
 //     short; with point_extrapolation > 0 an accepted step is doubled while the point's cost
 //     keeps decreasing (a line search along the Gauss-Newton direction), and a point stops
 //     iterating once a step gains less than point_tolerance of its cost.
+// Threads (BaOptions::threads > 1): every loop over the free points (linearization, Schur
+// accumulation, point updates, the step's cost, the point refinement) runs on a pool created
+// once per solve, over fixed chunks of points that the threads claim as they go; sums into the
+// camera blocks and costs are kept per chunk and added in chunk order, so a result does not
+// depend on the scheduling and differs from the 1-thread result only by rounding. Below 256
+// free points per thread it uses fewer threads (one for < 512 points).
 // Stops when the relative cost decrease of an accepted step is below `tolerance`, when no
 // damped step decreases the cost, or after max_sweeps.
 //
@@ -46,7 +51,7 @@ struct BaOptions {
   double robust_sigma_px = 2.0;  // Geman-McClure sigma
   int max_sweeps = 20;
   double tolerance = 1e-6;       // relative cost change of an accepted sweep
-  int threads = 1;               // point blocks (and linearization) run on this many threads
+  int threads = 1;               // threads for the loops over points (see above)
   bool use_schur = true;         // eliminate the points inside each camera update
   // How the reduced camera system (use_schur) is solved: block Gauss-Seidel (stops when
   // max |change| <= camera_gs_tolerance * max |update|) or block-Jacobi preconditioned CG
