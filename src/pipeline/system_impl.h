@@ -77,7 +77,8 @@ struct System::Impl {
   std::string cur_text;
   std::vector<FrameTrack> cur_tracks;
   std::vector<map::Landmark*> cur_landmarks;  // per cur_tracks entry, null if unmapped
-  std::size_t mapped_last_frame = 0;  // map points tracked in the last tracked frame
+  std::size_t mapped_last_frame = 0;  // map points tracked in the last tracked frame (not counting reuse)
+  std::size_t reused_this_frame = 0;  // map points taken over by new tracks in this frame
   Eigen::Isometry3d T_w_cur = Eigen::Isometry3d::Identity();
 
   // motion model

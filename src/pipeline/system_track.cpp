@@ -13,6 +13,7 @@ namespace vitamin_e::pipeline {
 
 void System::Impl::track(FrameResult* result) {
   refreshCurrentLandmarks();
+  reused_this_frame = 0;
   // Most map points of the previous frame gone at once (a cut, a sudden flip, a
   // covered lens): the few tracks left are not trusted for a pose.
   const std::size_t seen_before = mapped_last_frame;
@@ -38,7 +39,7 @@ void System::Impl::track(FrameResult* result) {
       // Localized: new tracks where old map points project take them over.
       const auto t1 = std::chrono::steady_clock::now();
       T_w_cur = T_w_c;
-      reuseMapPoints();
+      reused_this_frame = static_cast<std::size_t>(reuseMapPoints());
       const double reuse_ms = elapsedMs(t1);
       addTiming("reuse", reuse_ms);
       result->timing_ms["reuse"] = reuse_ms;
@@ -110,8 +111,12 @@ void System::Impl::track(FrameResult* result) {
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_cur;
+  // Map points handed to tracks by map reuse this frame are left out: they are
+  // mostly on tracks born a frame ago, half of which end at their next step, so
+  // counting them would make ordinary churn look like the map vanishing.
   mapped_last_frame = 0;
   for (map::Landmark* l : cur_landmarks) mapped_last_frame += l ? 1 : 0;
+  mapped_last_frame -= std::min(mapped_last_frame, reused_this_frame);
 }
 
 bool System::Impl::estimatePose(Eigen::Isometry3d* T_w_c, std::string* why) {
