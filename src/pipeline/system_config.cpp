@@ -86,6 +86,7 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("tracker", "min_track_curvature", &t.min_track_curvature));
   f.push_back(field("tracker", "noise_reference", &t.noise_reference));
   f.push_back(field("tracker", "min_track_sharpness", &t.min_track_sharpness));
+  f.push_back(field("tracker", "strength_at_subpixel_peak", &t.strength_at_subpixel_peak));
   f.push_back(field("tracker", "extremum_weight", &t.extremum_weight));
   f.push_back(field("tracker", "align_radius_px", &t.align_radius_px));
   f.push_back(field("tracker", "max_align_disagreement_px", &t.max_align_disagreement_px));

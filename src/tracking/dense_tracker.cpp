@@ -114,6 +114,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.kappa = kappa.ptr<float>(s.px.y())[s.px.x()];
       float peak = t.sign * s.kappa;
       s.uv = refineSubpixel(kappa, s.px, t.sign, &peak);
+      if (!cfg.strength_at_subpixel_peak) peak = t.sign * s.kappa;
       s.peak = peak;
       s.fail = kLossWeak;
       if (peak < min_k) continue;
@@ -228,6 +229,7 @@ int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Tra
     t.sign = e.kappa > 0.f ? 1.f : -1.f;
     float peak = std::fabs(e.kappa);
     t.uv = refineSubpixel(kappa, Eigen::Vector2i(e.x, e.y), t.sign, &peak);
+    if (!cfg.strength_at_subpixel_peak) peak = std::fabs(e.kappa);
     t.age = 0;
     t.strength = peak / scale;
     fresh->push_back(t);

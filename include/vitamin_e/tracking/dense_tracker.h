@@ -61,6 +61,8 @@ struct TrackerConfig {
   double max_curvature_ratio = 1.5; // ... or when its normalized |kappa| changes by more than this factor (>= 1)
   double min_track_sharpness = 0.05;// ... or when the peak it climbed to has peakSharpness() below this [1/px^2]:
                                     // a ridge or plateau of kappa lets the position slide (0 = off)
+  bool strength_at_subpixel_peak = true;  // the weak / strength-change checks use the height of the fitted
+                                    // sub-pixel peak (true) or kappa at the integer maximum (false)
   double extremum_weight = 0.3;     // (0, 1]: reported position = x_p + w * (extremum - x_p), x_p = the previous
                                     // position carried over by patch alignment on the smoothed images (a
                                     // complementary filter: the extremum anchors against drift, the patch
