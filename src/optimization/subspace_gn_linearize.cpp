@@ -192,9 +192,67 @@ inline void mirrorUpper(Eigen::Matrix<double, N, N>* H) {
 
 }  // namespace
 
+namespace {
+
+// One observation's two residual rows side by side in 2-wide arrays (SSE2 on x86-64), for a
+// camera packed as q (R's rows interleaved as column pairs at 0..5, R's third row at 6..8,
+// t at 9..11), d = p_w - t and depth z > kMinDepth: the pinhole Jacobian [A 0 B; 0 C D] as
+// (A, C) and (B, D), the residual, its Geman-McClure cost and weight, and the columns of
+// d r / d p_w, (row 0, row 1) each, plain and times the weight.
+struct ObservationRows {
+  using A2 = Eigen::Array2d;
+  using C2 = Eigen::Map<const A2>;
+  A2 xy, AC, BD, r, wr, j0, j1, j2, wj0, wj1, wj2;
+  double rho = 0.0, w = 0.0;
+  inline void evaluate(const double* q, double d0, double d1, double d2, double z, const double* uv,
+                       const A2& fxy, const A2& cxy, double s2) {
+    xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
+    const double iz = 1.0 / z;
+    AC = fxy * iz;
+    r = C2(uv) - (AC * xy + cxy);
+    const double sq = r(0) * r(0) + r(1) * r(1);
+    const double inv = 1.0 / (s2 + sq);
+    rho = s2 * sq * inv;
+    w = s2 * s2 * inv * inv;
+    BD = -AC * xy * iz;
+    // Column k: -((A, C) * (R0k, R1k) + (B, D) * R2k).
+    j0 = -(AC * C2(q) + BD * q[6]);
+    j1 = -(AC * C2(q + 2) + BD * q[7]);
+    j2 = -(AC * C2(q + 4) + BD * q[8]);
+    wj0 = w * j0;
+    wj1 = w * j1;
+    wj2 = w * j2;
+    wr = w * r;
+  }
+};
+
+// A point's 3x3 block and gradient, the two rows' terms kept apart and summed once per point.
+struct PointBlockRows {
+  using A2 = Eigen::Array2d;
+  A2 H00 = A2::Zero(), H01 = A2::Zero(), H02 = A2::Zero(), H11 = A2::Zero(), H12 = A2::Zero(), H22 = A2::Zero();
+  A2 G0 = A2::Zero(), G1 = A2::Zero(), G2 = A2::Zero();
+  inline void add(const ObservationRows& o) {
+    H00 += o.wj0 * o.j0;
+    H01 += o.wj0 * o.j1;
+    H02 += o.wj0 * o.j2;
+    H11 += o.wj1 * o.j1;
+    H12 += o.wj1 * o.j2;
+    H22 += o.wj2 * o.j2;
+    G0 += o.j0 * o.wr;
+    G1 += o.j1 * o.wr;
+    G2 += o.j2 * o.wr;
+  }
+  void sum(Eigen::Matrix3d* H, Eigen::Vector3d* g) const {
+    const double h00 = H00.sum(), h01 = H01.sum(), h02 = H02.sum(), h11 = H11.sum(), h12 = H12.sum(), h22 = H22.sum();
+    *H << h00, h01, h02, h01, h11, h12, h02, h12, h22;
+    *g = Eigen::Vector3d(G0.sum(), G1.sum(), G2.sum());
+  }
+};
+
+}  // namespace
+
 double SubspaceGn::linearize() {
   const int ncf = freeCameras();
-  const int npf = freePoints();
   cacheCameras();
   const int T = chunks_;
   // With use_schur the observations of free points enter the camera blocks only through the
@@ -224,8 +282,7 @@ double SubspaceGn::linearize() {
     Vector6d* gc = gc_t_[t].data();
     Vector6d* hdiag = hdiag_t_[t].data();
     for (int j = begin; j < end; ++j) {
-      A2 H00 = A2::Zero(), H01 = A2::Zero(), H02 = A2::Zero(), H11 = A2::Zero(), H12 = A2::Zero(), H22 = A2::Zero();
-      A2 G0 = A2::Zero(), G1 = A2::Zero(), G2 = A2::Zero();
+      PointBlockRows block;
       const Eigen::Vector3d& pw = P_.points[pts_[j]].p_w;
       const double px = pw.x(), py = pw.y(), pz = pw.z();
       for (int a = pt_begin_[j]; a < pt_begin_[j + 1]; ++a) {
@@ -242,31 +299,17 @@ double SubspaceGn::linearize() {
           }
           continue;
         }
-        const A2 xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
-        const double iz = 1.0 / z;
-        const A2 AC = fxy * iz;  // (A, C): the pinhole Jacobian is [A 0 B; 0 C D]
-        const A2 r = C2(obs_uv_[a].data()) - (AC * xy + cxy);
-        const double sq = r(0) * r(0) + r(1) * r(1);
-        const double inv = 1.0 / (s2 + sq);
-        cost += s2 * sq * inv;
-        const double w = s2 * s2 * inv * inv;
-        const A2 BD = -AC * xy * iz;
-        // Columns of d r / d p_w, (row 0, row 1) each, and the same scaled by w.
-        const A2 j0 = -(AC * C2(q) + BD * q[6]);
-        const A2 j1 = -(AC * C2(q + 2) + BD * q[7]);
-        const A2 j2 = -(AC * C2(q + 4) + BD * q[8]);
-        const A2 wj0 = w * j0, wj1 = w * j1, wj2 = w * j2;
-        H00 += wj0 * j0;
-        H01 += wj0 * j1;
-        H02 += wj0 * j2;
-        H11 += wj1 * j1;
-        H12 += wj1 * j2;
-        H22 += wj2 * j2;
-        const A2 wr = w * r;
-        G0 += j0 * wr;
-        G1 += j1 * wr;
-        G2 += j2 * wr;
+        ObservationRows o;
+        o.evaluate(q, d0, d1, d2, z, obs_uv_[a].data(), fxy, cxy, s2);
+        cost += o.rho;
+        block.add(o);
         if (s < 0) continue;
+        const A2& AC = o.AC;
+        const A2& BD = o.BD;
+        const A2& xy = o.xy;
+        const A2& wr = o.wr;
+        const A2 &wj0 = o.wj0, &wj1 = o.wj1, &wj2 = o.wj2;
+        const double w = o.w;
         const int ci = slot_cam_[s];
         // Columns of d r / d camera (right perturbation), column-major 2x6: column l at J + 2l.
         const double A = AC(0), C = AC(1), B = BD(0), D = BD(1), x = xy(0), y = xy(1);
@@ -301,9 +344,7 @@ double SubspaceGn::linearize() {
             for (int k = 0; k <= l; ++k) Hc(k, l) += w * (J[2 * k] * J[2 * l] + J[2 * k + 1] * J[2 * l + 1]);
         }
       }
-      const double h00 = H00.sum(), h01 = H01.sum(), h02 = H02.sum(), h11 = H11.sum(), h12 = H12.sum(), h22 = H22.sum();
-      Hpp_[j] << h00, h01, h02, h01, h11, h12, h02, h12, h22;
-      gp_[j] = Eigen::Vector3d(G0.sum(), G1.sum(), G2.sum());
+      block.sum(&Hpp_[j], &gp_[j]);
     }
     cost_t[t] = cost;
   });
@@ -365,10 +406,7 @@ double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& xw, Eigen::Matrix3d* 
     }
     return c;
   }
-  // The two residual rows side by side in 2-wide arrays (SSE2 on x86-64): the accumulators
-  // hold the rows' terms separately and are summed once per point.
-  A2 H00 = A2::Zero(), H01 = A2::Zero(), H02 = A2::Zero(), H11 = A2::Zero(), H12 = A2::Zero(), H22 = A2::Zero();
-  A2 G0 = A2::Zero(), G1 = A2::Zero(), G2 = A2::Zero();
+  PointBlockRows block;
   for (int a = a0; a < a1; ++a) {
     const double* q = cam_pack_[obs_cam_[a]].data();
     const double d0 = px - q[9], d1 = py - q[10], d2 = pz - q[11];
@@ -377,34 +415,12 @@ double SubspaceGn::evalPoint(int j, const Eigen::Vector3d& xw, Eigen::Matrix3d* 
       c += s2;
       continue;
     }
-    const A2 xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
-    const double iz = 1.0 / z;
-    const A2 AC = fxy * iz;
-    const A2 r = C2(obs_uv_[a].data()) - (AC * xy + cxy);
-    const double sq = r(0) * r(0) + r(1) * r(1);
-    const double inv = 1.0 / (s2 + sq);
-    c += s2 * sq * inv;
-    const double w = s2 * s2 * inv * inv;
-    const A2 BD = -AC * xy * iz;
-    // Columns of d r / d p_w: (row 0, row 1) of column k = -((A, C) * (R0k, R1k) + (B, D) * R2k).
-    const A2 j0 = -(AC * C2(q) + BD * q[6]);
-    const A2 j1 = -(AC * C2(q + 2) + BD * q[7]);
-    const A2 j2 = -(AC * C2(q + 4) + BD * q[8]);
-    const A2 wj0 = w * j0, wj1 = w * j1, wj2 = w * j2;
-    H00 += wj0 * j0;
-    H01 += wj0 * j1;
-    H02 += wj0 * j2;
-    H11 += wj1 * j1;
-    H12 += wj1 * j2;
-    H22 += wj2 * j2;
-    const A2 wr = w * r;
-    G0 += j0 * wr;
-    G1 += j1 * wr;
-    G2 += j2 * wr;
+    ObservationRows o;
+    o.evaluate(q, d0, d1, d2, z, obs_uv_[a].data(), fxy, cxy, s2);
+    c += o.rho;
+    block.add(o);
   }
-  const double h00 = H00.sum(), h01 = H01.sum(), h02 = H02.sum(), h11 = H11.sum(), h12 = H12.sum(), h22 = H22.sum();
-  *H << h00, h01, h02, h01, h11, h12, h02, h12, h22;
-  *g = Eigen::Vector3d(G0.sum(), G1.sum(), G2.sum());
+  block.sum(H, g);
   return c;
 }
 
