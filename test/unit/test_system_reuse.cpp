@@ -5,9 +5,12 @@
 // then comes back over the same ground. With reuse, new tracks on the way back
 // take those old points over, so the returning frames land where the outbound
 // frames were; without it, the return is triangulated from the newest, drifted
-// keyframes. The same run is also the guard of the 'map vanished' loss check
-// (src/pipeline/system_track.cpp): thousands of points are handed over by reuse
-// here and not one frame may be lost.
+// keyframes. The run also checks that reuse's hand-overs (about 100 points a
+// frame here) never trip the 'map vanished' loss check of system_track.cpp.
+// Not covered: the KITTI case that made that check leave out this frame's
+// reused points (most mapped points on one-frame-old tracks that end at their
+// next step); the tracks of these renders live too long for it, so removing
+// that exclusion leaves these tests green.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -147,8 +150,8 @@ int firstTracked(const ReturnTrip& run) {
 }  // namespace
 
 TEST(SystemReuse, ReturnTripTracksEveryFrameAfterInitWithoutReinitializing) {
-  // Also the 'map vanished' check: reuse hands thousands of points to new
-  // tracks here (about 100 a frame); none of that churn may count as a loss.
+  // Reuse hands over about 100 points a frame here; none of that churn may
+  // count as the map vanishing (a loss and a re-initialization).
   const ReturnTrip& run = withReuse();
   const int first = firstTracked(run);
   ASSERT_GE(first, 0) << "never initialized";
