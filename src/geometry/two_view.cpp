@@ -27,6 +27,11 @@ void TwoViewConfig::validate() const {
   if (!(max_reproj_error_px > 0.0)) throw std::invalid_argument("max_reproj_error_px must be > 0");
   if (!(point_min_parallax_deg >= 0.0)) throw std::invalid_argument("point_min_parallax_deg must be >= 0");
   if (!(rotation_only_max_ratio > 0.0)) throw std::invalid_argument("rotation_only_max_ratio must be > 0");
+  if (!(planar_min_ratio > 0.0)) throw std::invalid_argument("planar_min_ratio must be > 0");
+  if (!(planar_distinct_deg > 0.0 && planar_distinct_deg < 180.0))
+    throw std::invalid_argument("planar_distinct_deg must be in (0, 180)");
+  if (!(ambiguous_rival_ratio > 0.0)) throw std::invalid_argument("ambiguous_rival_ratio must be > 0");
+  if (!(min_valid_ratio >= 0.0 && min_valid_ratio <= 1.0)) throw std::invalid_argument("min_valid_ratio must be in [0, 1]");
 }
 
 Eigen::Matrix3d fitRotationOnly(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
@@ -123,6 +128,85 @@ void refineRelativePose(const std::vector<Eigen::Vector2d>& xy0, const std::vect
   }
 }
 
+
+struct Motion {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::UnitX();  // unit norm
+};
+
+struct Reconstruction {
+  Motion motion;
+  std::vector<bool> valid;
+  std::vector<Eigen::Vector3d> points;  // camera 0, |t| = 1
+  std::vector<double> parallax, depth;  // of the valid points
+  int num_valid = 0;
+};
+
+// Triangulates every selected correspondence under a motion (camera 0 at the origin).
+Reconstruction triangulateInliers(const Motion& m, const std::vector<Eigen::Vector2d>& xy0,
+                                  const std::vector<Eigen::Vector2d>& xy1, const std::vector<bool>& mask,
+                                  const TwoViewConfig& config) {
+  Reconstruction rec;
+  rec.motion = m;
+  rec.valid.assign(xy0.size(), false);
+  rec.points.assign(xy0.size(), Eigen::Vector3d::Zero());
+  Eigen::Isometry3d T_c1_c0 = Eigen::Isometry3d::Identity();
+  T_c1_c0.linear() = m.R;
+  T_c1_c0.translation() = m.t;
+  const std::vector<Eigen::Isometry3d> T_w_c = {Eigen::Isometry3d::Identity(), T_c1_c0.inverse()};
+  TriangulationConfig tc;
+  tc.focal_px = config.focal_px;
+  tc.min_parallax_deg = config.point_min_parallax_deg;
+  tc.max_reproj_error_px = config.max_reproj_error_px;
+  tc.gn_iterations = 5;
+  for (size_t i = 0; i < xy0.size(); ++i) {
+    if (!mask[i]) continue;
+    const TriangulationResult tr = triangulatePoint(T_w_c, {xy0[i], xy1[i]}, tc);
+    if (!tr.ok) continue;
+    rec.valid[i] = true;
+    rec.points[i] = tr.p_w;
+    rec.parallax.push_back(tr.parallax_deg);
+    rec.depth.push_back(tr.p_w.z());
+  }
+  rec.num_valid = static_cast<int>(rec.depth.size());
+  return rec;
+}
+
+// Homography x1 ~ H x0 (normalized coordinates) by RANSAC, then least squares on its inliers.
+bool fitHomography(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1, double thr,
+                   Eigen::Matrix3d* H) {
+  if (xy0.size() < 8) return false;
+  std::vector<cv::Point2d> p0(xy0.size()), p1(xy1.size());
+  for (size_t i = 0; i < xy0.size(); ++i) {
+    p0[i] = cv::Point2d(xy0[i].x(), xy0[i].y());
+    p1[i] = cv::Point2d(xy1[i].x(), xy1[i].y());
+  }
+  const cv::Mat Hcv = cv::findHomography(p0, p1, cv::RANSAC, 2.0 * thr);
+  if (Hcv.empty()) return false;
+  cv::cv2eigen(Hcv, *H);
+  return H->allFinite();
+}
+
+// The motions of a calibrated homography H = R + t n^T (plane n^T X = 1 in camera 0): up
+// to four (R, t) with |t| = 1; cheirality is left to the caller.
+std::vector<Motion> decomposeHomography(const Eigen::Matrix3d& H) {
+  std::vector<cv::Mat> Rs, ts, ns;
+  cv::Mat Hcv;
+  cv::eigen2cv(H, Hcv);
+  cv::decomposeHomographyMat(Hcv, cv::Mat::eye(3, 3, CV_64F), Rs, ts, ns);
+  std::vector<Motion> out;
+  for (size_t k = 0; k < Rs.size(); ++k) {
+    Motion m;
+    cv::cv2eigen(Rs[k], m.R);
+    Eigen::Vector3d tk;
+    cv::cv2eigen(ts[k], tk);
+    if (!m.R.allFinite() || !tk.allFinite() || tk.norm() < 1e-12) continue;
+    m.t = tk.normalized();
+    out.push_back(m);
+  }
+  return out;
+}
+
 }  // namespace
 
 TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
@@ -203,30 +287,83 @@ TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const s
     }
   }
 
-  // Triangulate each essential inlier with camera 0 at the origin.
+  // The motion candidates. For a scene that is (nearly) one plane, the essential matrix is
+  // not unique: the plane's homography has two physically different decompositions, and the
+  // five-point RANSAC returns either of them at random. The false one ("twisted" motion,
+  // roughly along the plane normal instead of across it) explains every correspondence
+  // just as well, so inlier counts cannot tell them apart; only cheirality can: under it,
+  // part of the points land behind a camera. When a homography explains nearly all the
+  // essential inliers, its decompositions are therefore added as candidates, and the
+  // candidate that triangulates the most points in front of both cameras wins.
+  std::vector<Motion> candidates;
+  candidates.push_back({R, t});
+  {
+    std::vector<Eigen::Vector2d> in0, in1;
+    for (int i = 0; i < n; ++i) {
+      if (!e_in[i]) continue;
+      in0.push_back(xy0[i]);
+      in1.push_back(xy1[i]);
+    }
+    Eigen::Matrix3d H;
+    if (config.planar_min_ratio <= 1.0 && fitHomography(in0, in1, thr, &H)) {
+      int n_h = 0;
+      for (size_t i = 0; i < in0.size(); ++i) {
+        const Eigen::Vector3d q = H * in0[i].homogeneous();
+        if (q.z() > 0.0 && (in1[i] - q.head<2>() / q.z()).norm() * config.focal_px < 2.0 * config.ransac_threshold_px)
+          ++n_h;
+      }
+      res.num_homography_inliers = n_h;
+      if (n_h >= config.planar_min_ratio * n_e) {
+        res.planar = true;
+        for (const Motion& m : decomposeHomography(H)) candidates.push_back(m);
+      }
+    }
+  }
+  int best_index = -1;
+  std::vector<Reconstruction> recs;
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    recs.push_back(triangulateInliers(candidates[c], xy0, xy1, e_in, config));
+    if (best_index < 0 || recs.back().num_valid > recs[best_index].num_valid) best_index = static_cast<int>(c);
+  }
+  if (res.planar && best_index > 0) {
+    // A homography motion won: polish it on the epipolar error like the essential one, and
+    // keep the polished motion only if it does not lose points.
+    Motion polished = candidates[best_index];
+    refineRelativePose(xy0, xy1, e_in, config.focal_px, config.ransac_threshold_px, 10, &polished.R, &polished.t);
+    Reconstruction rp = triangulateInliers(polished, xy0, xy1, e_in, config);
+    if (rp.num_valid >= recs[best_index].num_valid) recs[best_index] = std::move(rp);
+  }
+  const Reconstruction& best = recs[best_index];
+  res.used_homography = best_index > 0;
+  // A rival: the most points triangulated by a candidate whose translation points elsewhere.
+  for (size_t c = 0; c < recs.size(); ++c) {
+    const double cos_dir = recs[c].motion.t.normalized().dot(best.motion.t.normalized());
+    if (cos_dir < std::cos(config.planar_distinct_deg * M_PI / 180.0))
+      res.num_rival_inliers = std::max(res.num_rival_inliers, recs[c].num_valid);
+  }
+  R = best.motion.R;
+  t = best.motion.t;
   Eigen::Isometry3d T_c1_c0 = Eigen::Isometry3d::Identity();
   T_c1_c0.linear() = R;
-  T_c1_c0.translation() = t;  // unit norm from recoverPose
-  const std::vector<Eigen::Isometry3d> T_w_c = {Eigen::Isometry3d::Identity(), T_c1_c0.inverse()};
-  TriangulationConfig tc;
-  tc.focal_px = config.focal_px;
-  tc.min_parallax_deg = config.point_min_parallax_deg;
-  tc.max_reproj_error_px = config.max_reproj_error_px;
-  tc.gn_iterations = 5;
-  std::vector<double> parallax, depth;
-  for (int i = 0; i < n; ++i) {
-    if (!e_in[i]) continue;
-    const TriangulationResult tr = triangulatePoint(T_w_c, {xy0[i], xy1[i]}, tc);
-    if (!tr.ok) continue;
-    res.valid[i] = true;
-    res.points_c0[i] = tr.p_w;
-    parallax.push_back(tr.parallax_deg);
-    depth.push_back(tr.p_w.z());
-  }
-  res.num_inliers = static_cast<int>(depth.size());
-  res.median_parallax_deg = median(parallax);
+  T_c1_c0.translation() = t;
+  res.valid = best.valid;
+  res.points_c0 = best.points;
+  const std::vector<double>& depth = best.depth;
+  res.num_inliers = best.num_valid;
+  res.median_parallax_deg = median(best.parallax);
   if (res.num_inliers < config.min_points) {
     res.reason = "too few valid triangulated points";
+    return res;
+  }
+  if (res.num_inliers < config.min_valid_ratio * n_e) {
+    res.reason = "degenerate: only " + std::to_string(res.num_inliers) + " of " + std::to_string(n_e) +
+                 " essential inliers triangulate in front of both cameras";
+    return res;
+  }
+  res.ambiguous = res.num_rival_inliers >= config.ambiguous_rival_ratio * res.num_inliers;
+  if (res.ambiguous && config.refuse_ambiguous) {
+    res.reason = "ambiguous: planar scene, two different motions explain the views (" +
+                 std::to_string(res.num_inliers) + " vs " + std::to_string(res.num_rival_inliers) + " points)";
     return res;
   }
   if (res.median_parallax_deg < config.min_parallax_deg) {

@@ -167,6 +167,11 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("init", "max_reproj_error_px", &in.max_reproj_error_px));
   f.push_back(field("init", "point_min_parallax_deg", &in.point_min_parallax_deg));
   f.push_back(field("init", "rotation_only_max_ratio", &in.rotation_only_max_ratio));
+  f.push_back(field("init", "planar_min_ratio", &in.planar_min_ratio));
+  f.push_back(field("init", "planar_distinct_deg", &in.planar_distinct_deg));
+  f.push_back(field("init", "ambiguous_rival_ratio", &in.ambiguous_rival_ratio));
+  f.push_back(field("init", "refuse_ambiguous", &in.refuse_ambiguous));
+  f.push_back(field("init", "min_valid_ratio", &in.min_valid_ratio));
   // pnp; focal_px is taken from the camera
   auto& pn = c.pnp;
   f.push_back(field("pnp", "ransac_threshold_px", &pn.ransac_threshold_px));
