@@ -139,6 +139,16 @@ void System::Impl::initialize(FrameResult* result) {
   result->T_w_c = T_w_cur;
   result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
                     std::to_string(tv.median_parallax_deg) + " deg";
+  // Planar scenes (two_view.h): say where the motion came from, and say so when two views
+  // could not tell two different motions apart (the map may then be built on the wrong one).
+  if (tv.used_homography) {
+    result->message += "; planar scene: motion from the homography, not the essential matrix (best different motion: " +
+                       std::to_string(tv.num_rival_inliers) + " points in front of both cameras)";
+  }
+  if (tv.ambiguous) {
+    result->message += "; WARNING: ambiguous initialization, planar scene: another motion explains the views as well (" +
+                       std::to_string(tv.num_rival_inliers) + " of " + std::to_string(tv.num_inliers) + " points)";
+  }
   addTiming("init", elapsedMs(t0));
 }
 
