@@ -168,6 +168,7 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("init", "point_min_parallax_deg", &in.point_min_parallax_deg));
   f.push_back(field("init", "rotation_only_max_ratio", &in.rotation_only_max_ratio));
   f.push_back(field("init", "planar_min_ratio", &in.planar_min_ratio));
+  f.push_back(field("init", "homography_min_gain", &in.homography_min_gain));
   f.push_back(field("init", "planar_distinct_deg", &in.planar_distinct_deg));
   f.push_back(field("init", "ambiguous_rival_ratio", &in.ambiguous_rival_ratio));
   f.push_back(field("init", "refuse_ambiguous", &in.refuse_ambiguous));

@@ -11,7 +11,8 @@
 // triangulate behind a camera. So when a homography explains most essential inliers
 // (planar_min_ratio), its decompositions (cv::decomposeHomographyMat) join the essential
 // motion as candidates, and the candidate with the most points in front of both cameras
-// (and within max_reproj_error_px) wins; ties keep the essential motion. A result with fewer
+// (and within max_reproj_error_px) wins if it beats the essential motion clearly
+// (homography_min_gain); otherwise the essential motion is kept. A result with fewer
 // than min_valid_ratio of the inliers in front is refused; one where a different motion does
 // nearly as well is flagged ambiguous (or refused, refuse_ambiguous). Degeneracy: a rotation-only model (x1 ~ R x0, i.e. the homography of a pure
 // rotation, fitted to the essential inliers) is compared with the essential model; when it
@@ -45,6 +46,9 @@ struct TwoViewConfig {
   // planar_min_ratio of the essential inliers (> 1: never tested), its motions compete with the
   // essential one on the number of points triangulated in front of both cameras.
   double planar_min_ratio = 0.8;
+  // A homography motion replaces the essential one only if it triangulates at least
+  // (1 + this) times as many points in front of both cameras (the twisted motion: about 2x).
+  double homography_min_gain = 0.2;
   double planar_distinct_deg = 30.0;     // translations further apart than this are different motions
   double ambiguous_rival_ratio = 0.9;    // ambiguous if a different motion triangulates >= this * the best's points
   bool refuse_ambiguous = false;         // true: an ambiguous result is refused (ok=false); false: flagged only
