@@ -23,6 +23,7 @@
 #include "vitamin_e/synth/renderer.h"
 #include "vitamin_e/synth/scene.h"
 #include "vitamin_e/synth/sequence.h"
+#include "wall_trip.h"
 
 namespace ve = vitamin_e;
 using ve::pipeline::TrackingState;
@@ -40,17 +41,7 @@ constexpr double kTripM = 4.0;  // sideways, cosine profile: from rest, 1.26 m/s
 // from the room's +y wall, facing it (yaw pi/2 with a small wobble), pitched
 // down 0.15 rad instead of 0.4.
 Eigen::Isometry3d cameraPose(double t) {
-  const double phase = M_PI * t / (kFrames / kRate);
-  const double s = 0.5 * (1.0 - std::cos(phase));
-  const Eigen::Vector3d position(-0.5 * kTripM + kTripM * s, 1.0, 1.4 + 0.1 * std::sin(phase));
-  const double yaw = 0.5 * M_PI + 0.05 * std::sin(3.0 * t);
-  const double pitch = -0.15;
-  const Eigen::Vector3d forward(std::cos(yaw) * std::cos(pitch), std::sin(yaw) * std::cos(pitch), std::sin(pitch));
-  const Eigen::Vector3d right(std::sin(yaw), -std::cos(yaw), 0.0);
-  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
-  T_w_c.linear() << right, forward.cross(right), forward;  // optical: x right, y down, z forward
-  T_w_c.translation() = position;
-  return T_w_c;
+  return ve::test::wallTripPose(t, 2.0 * kFrames / kRate, kTripM, -0.15);
 }
 
 struct WallRun {
@@ -70,10 +61,7 @@ WallRun runAlongWall(std::uint64_t scene_seed) {
   const ve::camera::Camera camera = ve::synth::makeSequenceCamera(kWidth, kHeight, true);
   const ve::synth::Renderer renderer(scene, camera);
 
-  ve::pipeline::SystemConfig config;
-  config.init_min_disparity_px = 10.0;
-  config.keyframe_parallax_px = 10.0;
-  config.min_init_tracks = 100;
+  const ve::pipeline::SystemConfig config = ve::test::halfResolutionConfig();
   ve::pipeline::System system(config, camera);
 
   WallRun run;

@@ -21,6 +21,7 @@
 #include "vitamin_e/synth/renderer.h"
 #include "vitamin_e/synth/scene.h"
 #include "vitamin_e/synth/sequence.h"
+#include "wall_trip.h"
 
 namespace ve = vitamin_e;
 using ve::pipeline::TrackingState;
@@ -41,18 +42,7 @@ constexpr double kT0 = 50.0;              // timestamp of frame 0 [s]
 // a plane), with a small height and yaw wobble so that outbound and return
 // views are not pixel copies of each other.
 Eigen::Isometry3d cameraPose(double t) {
-  const double duration = kFrames / kRate;
-  const double phase = 2.0 * M_PI * t / duration;
-  const double s = 0.5 * (1.0 - std::cos(phase));
-  const Eigen::Vector3d position(-0.5 * kTripM + kTripM * s, 1.0, 1.4 + 0.1 * std::sin(phase));
-  const double yaw = 0.5 * M_PI + 0.05 * std::sin(3.0 * t);
-  const double pitch = -0.4;
-  const Eigen::Vector3d forward(std::cos(yaw) * std::cos(pitch), std::sin(yaw) * std::cos(pitch), std::sin(pitch));
-  const Eigen::Vector3d right(std::sin(yaw), -std::cos(yaw), 0.0);
-  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
-  T_w_c.linear() << right, forward.cross(right), forward;  // optical: x right, y down, z forward
-  T_w_c.translation() = position;
-  return T_w_c;
+  return ve::test::wallTripPose(t, kFrames / kRate, kTripM, -0.4);
 }
 
 struct ReturnTrip {
@@ -74,13 +64,8 @@ ReturnTrip runReturnTrip(double reuse_radius_px) {
   const ve::camera::Camera camera = ve::synth::makeSequenceCamera(kWidth, kHeight, true);
   const ve::synth::Renderer renderer(scene, camera);
 
-  ve::pipeline::SystemConfig config;
-  // The pixel thresholds of the defaults are tuned at 752x480: halved here
-  // (as in test_system_robustness). Everything else, map reuse included, is
-  // the default of the shipped configs.
-  config.init_min_disparity_px = 10.0;
-  config.keyframe_parallax_px = 10.0;
-  config.min_init_tracks = 100;
+  // Everything but the pixel thresholds, map reuse included, is the default.
+  ve::pipeline::SystemConfig config = ve::test::halfResolutionConfig();
   config.reuse_radius_px = reuse_radius_px;
   ve::pipeline::System system(config, camera);
 
