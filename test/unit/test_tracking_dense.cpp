@@ -62,6 +62,17 @@ Eigen::Matrix2d rotation(double deg) {
   return R;
 }
 
+// The image with Gaussian noise of sigma 8 grey levels (OpenCV's RNG seeded with seed).
+cv::Mat withNoise(const cv::Mat& img, unsigned seed) {
+  cv::Mat f, noise(img.size(), CV_32F);
+  cv::theRNG().state = seed;
+  cv::randn(noise, 0.0, 8.0);
+  img.convertTo(f, CV_32F);
+  f += noise;
+  f.convertTo(f, CV_8U);
+  return f;
+}
+
 }  // namespace
 
 // kappa = f'(r)^3 / r for a radial profile: for a bright Gaussian blob it is
@@ -340,17 +351,8 @@ TEST(DenseTracker, PatchFilterReducesJitterOnNoisyImages) {
   const int w = 320, h = 240;
   const auto blobs = randomBlobs(700, w, h, 17);
   const Eigen::Vector2d t(2.3, -1.4);
-  auto noisy = [&](const cv::Mat& img, unsigned seed) {
-    cv::Mat f, noise(h, w, CV_32F);
-    cv::theRNG().state = seed;
-    cv::randn(noise, 0.0, 8.0);
-    img.convertTo(f, CV_32F);
-    f += noise;
-    f.convertTo(f, CV_8U);
-    return f;
-  };
-  const cv::Mat i0 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 1);
-  const cv::Mat i1 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 2);
+  const cv::Mat i0 = withNoise(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 1);
+  const cv::Mat i1 = withNoise(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 2);
   auto run = [&](const vt::TrackerConfig& cfg, std::vector<double>* err) {
     vt::DenseTracker tracker(cfg);
     const auto f0 = tracker.track(i0, 0.0);
@@ -392,18 +394,9 @@ TEST(DenseTracker, PatchConfirmationEndsJumpedTracks) {
   const int w = 320, h = 240;
   const auto blobs = randomBlobs(700, w, h, 17);
   const Eigen::Vector2d t(2.3, -1.4);
-  auto noisy = [&](const cv::Mat& img, unsigned seed) {
-    cv::Mat f, noise(h, w, CV_32F);
-    cv::theRNG().state = seed;
-    cv::randn(noise, 0.0, 8.0);
-    img.convertTo(f, CV_32F);
-    f += noise;
-    f.convertTo(f, CV_8U);
-    return f;
-  };
-  const cv::Mat i0 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 1);
-  const cv::Mat i1 = noisy(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 2);
-  const cv::Mat other = noisy(renderBlobs(randomBlobs(700, w, h, 99), w, h, Eigen::Matrix2d::Identity(),
+  const cv::Mat i0 = withNoise(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 1);
+  const cv::Mat i1 = withNoise(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 2);
+  const cv::Mat other = withNoise(renderBlobs(randomBlobs(700, w, h, 99), w, h, Eigen::Matrix2d::Identity(),
                                           Eigen::Vector2d::Zero()), 3);
   struct Result {
     std::vector<double> err;
