@@ -37,7 +37,7 @@ void Map::clear() {
   keyframes_.clear();
 }
 
-Landmark* Map::landmark(std::uint64_t id) {
+Landmark* Map::find(std::uint64_t id) {
   auto it = landmarks_.find(id);
   return it == landmarks_.end() ? nullptr : &it->second;
 }
@@ -47,14 +47,17 @@ const Landmark* Map::landmark(std::uint64_t id) const {
   return it == landmarks_.end() ? nullptr : &it->second;
 }
 
-Landmark& Map::addLandmark(std::uint64_t id, const Eigen::Vector3d& p_w, std::uint8_t intensity) {
-  Landmark& l = landmarks_[id];
+const Landmark& Map::addLandmark(const NewLandmark& n) {
+  Landmark& l = landmarks_[n.id];
   l = Landmark{};
-  l.id = id;
-  l.p_w = p_w;
-  l.intensity = intensity;
+  l.id = n.id;
+  l.p_w = n.p_w;
+  l.intensity = n.intensity;
+  l.polarity = n.polarity;
+  l.last_seen_frame = n.seen_frame;
+  l.num_observations = n.prior_observations;
   for (const Keyframe& kf : keyframes_) {
-    auto it = kf.observations.find(id);
+    auto it = kf.observations.find(n.id);
     if (it != kf.observations.end()) {
       l.observations.push_back({kf.frame_index, it->second});
       ++l.num_observations;
@@ -65,9 +68,30 @@ Landmark& Map::addLandmark(std::uint64_t id, const Eigen::Vector3d& p_w, std::ui
 
 void Map::removeLandmark(std::uint64_t id) { landmarks_.erase(id); }
 
-Keyframe& Map::addKeyframe(Keyframe keyframe) {
+void Map::setLandmarkPosition(std::uint64_t id, const Eigen::Vector3d& p_w) {
+  if (Landmark* l = find(id)) l->p_w = p_w;
+}
+
+void Map::markSeen(std::uint64_t id, std::uint64_t frame_index) {
+  if (Landmark* l = find(id)) l->last_seen_frame = frame_index;
+}
+
+void Map::markAllSeen(std::uint64_t frame_index) {
+  for (auto& kv : landmarks_) kv.second.last_seen_frame = frame_index;
+}
+
+int Map::flagOutlier(std::uint64_t id) {
+  Landmark* l = find(id);
+  return l ? ++l->outlier_count : 0;
+}
+
+void Map::setKeyframePose(std::size_t index, const Eigen::Isometry3d& T_w_c) {
+  if (index < keyframes_.size()) keyframes_[index].T_w_c = T_w_c;
+}
+
+const Keyframe& Map::addKeyframe(Keyframe keyframe) {
   for (const auto& obs : keyframe.observations) {
-    if (Landmark* l = landmark(obs.first)) {
+    if (Landmark* l = find(obs.first)) {
       ++l->num_observations;
       l->observations.push_back({keyframe.frame_index, obs.second});
     }
@@ -144,7 +168,8 @@ bool observedByBoth(const std::deque<Keyframe>& keyframes, std::uint64_t a, std:
 }
 }  // namespace
 
-bool Map::relabelLandmark(std::uint64_t old_id, std::uint64_t new_id) {
+bool Map::relabelLandmark(std::uint64_t old_id, std::uint64_t new_id, std::uint64_t frame_index,
+                          std::int8_t track_polarity) {
   auto it = landmarks_.find(old_id);
   if (it == landmarks_.end() || old_id == new_id || landmarks_.count(new_id)) return false;
   if (observedByBoth(keyframes_, old_id, new_id)) return false;
@@ -169,19 +194,27 @@ bool Map::relabelLandmark(std::uint64_t old_id, std::uint64_t new_id) {
   if (l.observations.empty() && std::find(orphans_.begin(), orphans_.end(), new_id) == orphans_.end()) {
     orphans_.push_back(new_id);
   }
+  l.last_seen_frame = frame_index;
+  if (l.polarity == 0) l.polarity = track_polarity;
   landmarks_.emplace(new_id, std::move(l));
   return true;
 }
 
-bool Map::reviveDormant(std::size_t index, std::uint64_t track_id, std::uint64_t frame_index) {
+bool Map::reviveDormant(std::size_t index, std::uint64_t track_id, std::uint64_t frame_index,
+                        std::int8_t track_polarity) {
   if (index >= dormant_.size() || dormant_[index].revived || landmarks_.count(track_id)) return false;
   DormantLandmark& d = dormant_[index];
-  Landmark& l = addLandmark(track_id, d.p_w, d.intensity);
-  l.polarity = d.polarity;
-  l.revived = true;
-  l.num_observations += d.num_observations;
-  l.last_seen_frame = frame_index;
-  if (l.observations.empty()) orphans_.push_back(track_id);
+  NewLandmark n;
+  n.id = track_id;
+  n.p_w = d.p_w;
+  n.intensity = d.intensity;
+  n.polarity = d.polarity != 0 ? d.polarity : track_polarity;
+  n.seen_frame = frame_index;
+  n.prior_observations = d.num_observations;
+  addLandmark(n);
+  Landmark* l = find(track_id);
+  l->revived = true;
+  if (l->observations.empty()) orphans_.push_back(track_id);
   d.revived = true;
   return true;
 }

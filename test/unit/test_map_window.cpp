@@ -5,8 +5,19 @@
 using vitamin_e::map::Keyframe;
 using vitamin_e::map::Map;
 using vitamin_e::map::MapConfig;
+using vitamin_e::map::NewLandmark;
 
 namespace {
+NewLandmark newLandmark(std::uint64_t id, const Eigen::Vector3d& p_w, std::uint8_t intensity,
+                        std::uint64_t seen_frame = 0) {
+  NewLandmark l;
+  l.id = id;
+  l.p_w = p_w;
+  l.intensity = intensity;
+  l.seen_frame = seen_frame;
+  return l;
+}
+
 Keyframe keyframeSeeing(std::uint64_t frame, std::uint64_t first_id, std::uint64_t count) {
   Keyframe kf;
   kf.frame_index = frame;
@@ -23,7 +34,7 @@ TEST(Map, KeyframeWindowIsBoundedAndUnseenLandmarksAreArchived) {
   // Keyframe k sees landmarks [100k, 100k + 50); each landmark is seen by one keyframe.
   for (std::uint64_t k = 0; k < 10; ++k) {
     for (std::uint64_t id = 100 * k; id < 100 * k + 50; ++id) {
-      map.addLandmark(id, Eigen::Vector3d(double(id), 0, 1), 7).last_seen_frame = k;
+      map.addLandmark(newLandmark(id, Eigen::Vector3d(double(id), 0, 1), 7, k));
     }
     map.addKeyframe(keyframeSeeing(k, 100 * k, 50));
     ASSERT_LE(map.keyframes().size(), 3u);
@@ -43,8 +54,9 @@ TEST(Map, ArchiveKeepsOnePointPerVoxelAndSkipsPoorlyObserved) {
   cfg.min_observations_to_archive = 2;
   Map map(cfg);
   for (std::uint64_t id = 0; id < 20; ++id) {
-    auto& l = map.addLandmark(id, Eigen::Vector3d(0.1 * double(id % 5), 0.2, 0.3), 1);
-    l.num_observations = id < 10 ? 2 : 0;  // keyframe 5 adds one: the last ten stay poorly observed
+    NewLandmark l = newLandmark(id, Eigen::Vector3d(0.1 * double(id % 5), 0.2, 0.3), 1);
+    l.prior_observations = id < 10 ? 2 : 0;  // keyframe 5 adds one: the last ten stay poorly observed
+    map.addLandmark(l);
   }
   map.addKeyframe(keyframeSeeing(5, 0, 20));
   map.addKeyframe(keyframeSeeing(6, 1000, 1));
@@ -59,9 +71,9 @@ TEST(Map, LandmarkStillTrackedIsRetiredOnceNoLongerSeen) {
   cfg.min_observations_to_archive = 1;
   Map map(cfg);
   map.addKeyframe(keyframeSeeing(0, 7, 1));
-  auto& l = map.addLandmark(7, Eigen::Vector3d(1, 2, 3), 1);
+  const auto& l = map.addLandmark(newLandmark(7, Eigen::Vector3d(1, 2, 3), 1));
   ASSERT_EQ(l.observations.size(), 1u);
-  l.last_seen_frame = 10;  // the track lives on without new keyframes seeing it
+  map.markSeen(7, 10);  // the track lives on without new keyframes seeing it
   map.addKeyframe(keyframeSeeing(5, 100, 1));
   map.addKeyframe(keyframeSeeing(8, 100, 1));  // retires keyframe 0: landmark 7 has no observation left
   ASSERT_NE(map.landmark(7), nullptr);          // still seen at frame 10 > oldest keyframe 5
@@ -84,7 +96,7 @@ TEST(Map, ArchiveStaysUnderItsCapAndKeepsEveryPlaceExplored) {
   for (std::uint64_t k = 0; k < 2000; ++k) {
     for (int i = 0; i < 50; ++i, ++id) {
       const double u = double((id * 7919) % 1000) / 1000.0, v = double((id * 104729) % 997) / 997.0;
-      map.addLandmark(id, Eigen::Vector3d(0.1 * double(k) + u, v, 3.0), 1).last_seen_frame = k;
+      map.addLandmark(newLandmark(id, Eigen::Vector3d(0.1 * double(k) + u, v, 3.0), 1, k));
     }
     map.addKeyframe(keyframeSeeing(k, id - 50, 50));
     ASSERT_LE(map.archive().size(), 1000u) << "keyframe " << k;
@@ -109,9 +121,10 @@ TEST(Map, RetiredLandmarksStayDormantUpToTheirCapAndCanBeRevived) {
   Map map(cfg);
   for (std::uint64_t k = 0; k < 6; ++k) {
     for (std::uint64_t id = 100 * k; id < 100 * k + 20; ++id) {
-      auto& l = map.addLandmark(id, Eigen::Vector3d(double(id), 0, 1), 9);
+      NewLandmark l = newLandmark(id, Eigen::Vector3d(double(id), 0, 1), 9);
       l.polarity = -1;
-      l.num_observations = 1;
+      l.prior_observations = 1;
+      map.addLandmark(l);
     }
     map.addKeyframe(keyframeSeeing(k, 100 * k, 20));
   }
@@ -161,11 +174,11 @@ TEST(Map, RelabelMovesKeyframeObservationsAndRefusesClashes) {
   map.addKeyframe(a);
   map.addKeyframe(b);
   map.addKeyframe(c);
-  map.addLandmark(10, Eigen::Vector3d(1, 2, 3), 5);
+  map.addLandmark(newLandmark(10, Eigen::Vector3d(1, 2, 3), 5));
   ASSERT_EQ(map.landmark(10)->observations.size(), 2u);
-  EXPECT_FALSE(map.relabelLandmark(10, 20));  // both seen by keyframe 2: two different points
-  EXPECT_FALSE(map.relabelLandmark(11, 30));  // no such landmark
-  ASSERT_TRUE(map.relabelLandmark(10, 30));
+  EXPECT_FALSE(map.relabelLandmark(10, 20, 4));  // both seen by keyframe 2: two different points
+  EXPECT_FALSE(map.relabelLandmark(11, 30, 4));  // no such landmark
+  ASSERT_TRUE(map.relabelLandmark(10, 30, 4));
   EXPECT_EQ(map.landmark(10), nullptr);
   const auto* l = map.landmark(30);
   ASSERT_NE(l, nullptr);

@@ -54,6 +54,16 @@ struct DormantLandmark {
   bool revived = false;  // taken back into the active map (the entry is then a tombstone)
 };
 
+// What a new landmark starts with (Map::addLandmark).
+struct NewLandmark {
+  std::uint64_t id = 0;  // the track id
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  std::uint8_t intensity = 0;
+  std::int8_t polarity = 0;
+  std::uint64_t seen_frame = 0;  // last frame its track was seen in
+  int prior_observations = 0;    // keyframe observations it had before the active window
+};
+
 struct ArchivedPoint {
   Eigen::Vector3d p_w;
   std::uint8_t intensity;
@@ -79,31 +89,40 @@ class Map {
 
   void clear();  // drops active keyframes and landmarks (archive kept)
 
-  Landmark* landmark(std::uint64_t id);
+  // Read access. The map keeps its invariants (observations on both sides,
+  // orphans, the archive): every change goes through the methods below.
   const Landmark* landmark(std::uint64_t id) const;
+  const std::unordered_map<std::uint64_t, Landmark>& landmarks() const { return landmarks_; }
+  const std::deque<Keyframe>& keyframes() const { return keyframes_; }
+
   // Adds (or replaces) a landmark and attaches the observations the active
   // keyframes have of its track.
-  Landmark& addLandmark(std::uint64_t id, const Eigen::Vector3d& p_w, std::uint8_t intensity);
+  const Landmark& addLandmark(const NewLandmark& landmark);
   void removeLandmark(std::uint64_t id);  // bad point: dropped, not archived
-  const std::unordered_map<std::uint64_t, Landmark>& landmarks() const { return landmarks_; }
-  std::unordered_map<std::uint64_t, Landmark>& landmarks() { return landmarks_; }
+  void setLandmarkPosition(std::uint64_t id, const Eigen::Vector3d& p_w);
+  void markSeen(std::uint64_t id, std::uint64_t frame_index);
+  void markAllSeen(std::uint64_t frame_index);
+  // Counts one more time the landmark was an outlier; returns the new count (0: no such landmark).
+  int flagOutlier(std::uint64_t id);
 
   // Adds a keyframe (its observations are attached to the existing landmarks);
   // retires the oldest beyond max_keyframes. Landmarks that no active keyframe
   // observes any more and that were not seen since the oldest active keyframe
   // are archived (if well observed) and removed.
-  Keyframe& addKeyframe(Keyframe keyframe);
-  const std::deque<Keyframe>& keyframes() const { return keyframes_; }
-  std::deque<Keyframe>& keyframes() { return keyframes_; }
+  const Keyframe& addKeyframe(Keyframe keyframe);
+  void setKeyframePose(std::size_t index, const Eigen::Isometry3d& T_w_c);  // index into keyframes()
 
   // Re-association (map reuse). relabelLandmark gives an active landmark whose
   // track ended the id of a new track seen at the same place: the keyframes'
   // observations move to the new id. reviveDormant brings dormant landmark
-  // `index` back into the active map under `track_id`. Both return false (and
-  // change nothing) when the ids clash: the new id is a landmark already, or a
-  // keyframe observed both tracks (they cannot be one point).
-  bool relabelLandmark(std::uint64_t old_id, std::uint64_t new_id);
-  bool reviveDormant(std::size_t index, std::uint64_t track_id, std::uint64_t frame_index);
+  // `index` back into the active map under `track_id`. Both mark the landmark
+  // seen at frame_index and take the track's polarity when theirs is unknown.
+  // Both return false (and change nothing) when the ids clash: the new id is a
+  // landmark already, or a keyframe observed both tracks (they cannot be one point).
+  bool relabelLandmark(std::uint64_t old_id, std::uint64_t new_id, std::uint64_t frame_index,
+                       std::int8_t track_polarity = 0);
+  bool reviveDormant(std::size_t index, std::uint64_t track_id, std::uint64_t frame_index,
+                     std::int8_t track_polarity = 0);
   const std::deque<DormantLandmark>& dormant() const { return dormant_; }
   // Dormant landmarks ever dropped from the front (index i of dormant() is entry
   // number dormantDropped() + i in the order of retirement).
@@ -119,6 +138,7 @@ class Map {
   void retireLandmark(const Landmark& landmark);  // to the archive and the dormant landmarks
   void archive(const Landmark& landmark);
   void coarsenArchive();
+  Landmark* find(std::uint64_t id);
 
   MapConfig config_;
   std::unordered_map<std::uint64_t, Landmark> landmarks_;
