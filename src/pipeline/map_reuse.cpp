@@ -1,14 +1,10 @@
-// Map reuse: a new track that appears where an existing map point projects takes
-// that point over instead of being triangulated again from the newest (and
-// drifted) keyframes. Candidates are the window's landmarks whose track ended
-// and the dormant landmarks that left the window; an association needs the same
-// curvature sign, no other track nearer to the projection, and no mapped point
-// clearly in front of it (the depth of the map points tracked around it).
+#include "vitamin_e/pipeline/map_reuse.h"
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
-
-#include "system_impl.h"
+#include <vector>
 
 namespace vitamin_e::pipeline {
 
@@ -88,19 +84,29 @@ struct Claim {
 
 }  // namespace
 
-int System::Impl::reuseMapPoints() {
-  const double radius = config.reuse_radius_px;
-  if (!(radius > 0.0) || cur_tracks.empty()) return 0;
-  const Eigen::Isometry3d T_c_w = T_w_cur.inverse();
+MapReuse::MapReuse(const SystemConfig& config, const camera::Camera& camera)
+    : radius_px_(config.reuse_radius_px),
+      occlusion_ratio_(config.reuse_occlusion_ratio),
+      dormant_per_frame_(static_cast<std::size_t>(config.reuse_dormant_per_frame)),
+      camera_(camera) {}
+
+int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth,
+                        map::Map* map) {
+  const double radius = radius_px_;
+  const std::vector<FrameTrack>& tracks = frame.tracks;
+  const std::vector<const map::Landmark*>& landmarks = frame.landmarks;
+  const camera::Camera& camera = camera_;
+  if (!(radius > 0.0) || tracks.empty()) return 0;
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
   auto pinhole = [&](const Eigen::Vector2d& xy) {
     return Eigen::Vector2d(camera.fx() * xy.x() + camera.cx(), camera.fy() * xy.y() + camera.cy());
   };
   TrackGrid grid(camera.width(), camera.height(), std::max(radius, 1.0));
   DepthGrid depth(camera.width(), camera.height(), 24);
-  std::vector<Eigen::Vector2d> track_px(cur_tracks.size());
-  for (std::size_t i = 0; i < cur_tracks.size(); ++i) {
-    track_px[i] = pinhole(cur_tracks[i].xy);
-    if (const map::Landmark* l = cur_landmarks[i]) {
+  std::vector<Eigen::Vector2d> track_px(tracks.size());
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    track_px[i] = pinhole(tracks[i].xy);
+    if (const map::Landmark* l = landmarks[i]) {
       const double z = (T_c_w * l->p_w).z();
       if (z > 0.0) depth.add(track_px[i], z);
     }
@@ -108,13 +114,13 @@ int System::Impl::reuseMapPoints() {
   grid.build(track_px);
   const double r2 = radius * radius;
   const double min_depth = 1e-3 * scene_depth;
-  std::vector<Claim> claims(cur_tracks.size());
+  std::vector<Claim> claims(tracks.size());
   auto consider = [&](const Eigen::Vector3d& p_w, std::int8_t polarity, const Claim& what) {
     const Eigen::Vector3d p_c = T_c_w * p_w;
     if (p_c.z() <= min_depth) return;
     const Eigen::Vector2d px = pinhole(p_c.hnormalized());
     if (px.x() < 0 || px.y() < 0 || px.x() >= camera.width() || px.y() >= camera.height()) return;
-    if (p_c.z() > config.reuse_occlusion_ratio * depth.at(px)) return;
+    if (p_c.z() > occlusion_ratio_ * depth.at(px)) return;
     int nearest = -1;
     double best = std::numeric_limits<double>::infinity();
     grid.forNear(px, [&](int i) {
@@ -125,27 +131,27 @@ int System::Impl::reuseMapPoints() {
       }
     });
     // The nearest track must be unmapped, of the same curvature sign, and close.
-    if (nearest < 0 || best > r2 || cur_landmarks[nearest]) return;
-    if (polarity != 0 && cur_tracks[nearest].polarity != polarity) return;
+    if (nearest < 0 || best > r2 || landmarks[nearest]) return;
+    if (polarity != 0 && tracks[nearest].polarity != polarity) return;
     Claim& c = claims[nearest];
     if (best < c.d2) {
       c = what;
       c.d2 = best;
     }
   };
-  // Landmarks whose track ended: not seen in this frame (track() marks the seen).
-  for (const auto& kv : map.landmarks()) {
-    if (kv.second.last_seen_frame == frame_index) continue;
+  // Landmarks whose track ended: not seen in this frame (the seen ones are marked before).
+  for (const auto& kv : map->landmarks()) {
+    if (kv.second.last_seen_frame == frame.frame_index) continue;
     Claim c;
     c.landmark_id = kv.first;
     consider(kv.second.p_w, kv.second.polarity, c);
   }
   // Dormant landmarks, a bounded slice per frame in round robin: a new track
   // stays unmapped until the next keyframe, so it is met by several slices.
-  const auto& dormant = map.dormant();
-  const std::size_t budget = std::min<std::size_t>(dormant.size(), config.reuse_dormant_per_frame);
-  const std::uint64_t dropped = map.dormantDropped();
-  std::size_t start = dormant_cursor > dropped ? static_cast<std::size_t>(dormant_cursor - dropped) : 0;
+  const auto& dormant = map->dormant();
+  const std::size_t budget = std::min<std::size_t>(dormant.size(), dormant_per_frame_);
+  const std::uint64_t dropped = map->dormantDropped();
+  std::size_t start = dormant_cursor_ > dropped ? static_cast<std::size_t>(dormant_cursor_ - dropped) : 0;
   if (start >= dormant.size()) start = 0;
   for (std::size_t n = 0; n < budget; ++n) {
     const std::size_t k = (start + n) % dormant.size();
@@ -155,7 +161,7 @@ int System::Impl::reuseMapPoints() {
     c.dormant_index = k;
     consider(dormant[k].p_w, dormant[k].polarity, c);
   }
-  if (!dormant.empty()) dormant_cursor = dropped + (start + budget) % dormant.size();
+  if (!dormant.empty()) dormant_cursor_ = dropped + (start + budget) % dormant.size();
   // One track per landmark: a landmark claimed by two tracks goes to the nearer.
   std::unordered_map<std::uint64_t, std::size_t> winner;  // landmark key -> track index
   auto key_of = [](const Claim& c) { return c.dormant ? (c.dormant_index << 1 | 1) : (c.landmark_id << 1); };
@@ -167,17 +173,12 @@ int System::Impl::reuseMapPoints() {
   int reused = 0;
   for (const auto& kv : winner) {
     const Claim& c = claims[kv.second];
-    const FrameTrack& t = cur_tracks[kv.second];
-    const bool ok = c.dormant ? map.reviveDormant(c.dormant_index, t.id, frame_index)
-                              : map.relabelLandmark(c.landmark_id, t.id);
-    if (!ok) continue;
-    map::Landmark* l = map.landmark(t.id);
-    l->last_seen_frame = frame_index;
-    if (l->polarity == 0) l->polarity = t.polarity;
-    ++reused;
+    const FrameTrack& t = tracks[kv.second];
+    const bool ok = c.dormant ? map->reviveDormant(c.dormant_index, t.id, frame.frame_index, t.polarity)
+                              : map->relabelLandmark(c.landmark_id, t.id, frame.frame_index, t.polarity);
+    if (ok) ++reused;
   }
-  if (reused > 0) refreshCurrentLandmarks();
-  reused_points += static_cast<std::uint64_t>(reused);
+  total_reused_ += static_cast<std::uint64_t>(reused);
   return reused;
 }
 

@@ -2,7 +2,6 @@
 
 #include <stdexcept>
 
-#include "system_impl.h"
 
 namespace vitamin_e::pipeline {
 
@@ -39,11 +38,10 @@ bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::
 }
 
 void PipelinedSystem::trackingLoop() {
-  System::Impl& impl = *system_->impl_;
   while (std::optional<Input> in = input_.pop()) {
     TrackedFrame frame;
     try {
-      frame = impl.trackStage(in->image, in->timestamp, in->timestamp_text);
+      frame = system_->trackFrame(in->image, in->timestamp, in->timestamp_text);
     } catch (const std::exception& e) {
       frame.skipped = true;
       frame.timestamp = in->timestamp;
@@ -55,9 +53,8 @@ void PipelinedSystem::trackingLoop() {
 }
 
 void PipelinedSystem::mappingLoop() {
-  System::Impl& impl = *system_->impl_;
   while (std::optional<TrackedFrame> frame = tracked_.pop()) {
-    FrameResult result = impl.mapStage(std::move(*frame));
+    FrameResult result = system_->mapFrame(std::move(*frame));
     if (on_result_) on_result_(std::move(result));
     std::lock_guard<std::mutex> lock(count_mutex_);
     ++finished_;

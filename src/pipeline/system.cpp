@@ -1,6 +1,10 @@
-// pipeline::System: the public API and the per-frame dispatch.
+// pipeline::System: the stages composed, and the per-frame dispatch between
+// them: initialization until there is a map, then pose, map reuse, per-frame BA
+// and keyframes.
 #include "vitamin_e/pipeline/system.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -17,130 +21,62 @@ SystemConfig withCameraFocal(SystemConfig config, const camera::Camera& camera) 
   config.triangulation.focal_px = focal;
   return config;
 }
+
+FrameContext contextOf(TrackedFrame&& f) {
+  FrameContext frame;
+  frame.frame_index = f.frame_index;
+  frame.timestamp = f.timestamp;
+  frame.timestamp_text = std::move(f.timestamp_text);
+  frame.tracks = std::move(f.tracks);
+  return frame;
+}
 }  // namespace
 
 System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
-    : config(withCameraFocal(cfg, cam)), camera(cam), tracker(cfg.tracker), map(cfg.map) {}
-
-void validateImage(const cv::Mat& image, const camera::Camera& camera) {
-  if (image.empty() || image.type() != CV_8UC1) {
-    throw std::invalid_argument("SLAM input: expected a non-empty 8-bit single-channel (mono8) image");
-  }
-  if (image.cols != camera.width() || image.rows != camera.height()) {
-    throw std::invalid_argument("SLAM input: image is " + std::to_string(image.cols) + "x" +
-                                std::to_string(image.rows) + " but the calibration is " +
-                                std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
-  }
-}
+    : config(withCameraFocal(cfg, cam)),
+      camera(cam),
+      front_end(cfg.tracker, cam),
+      initializer(config, cam.fx()),
+      localizer(config),
+      reuse(config, cam),
+      mapper(config, cam),
+      map(cfg.map) {}
 
 void System::Impl::addTiming(const std::string& stage, double ms) {
   std::lock_guard<std::mutex> lock(timings_mutex);
   timings.add(stage, ms);
 }
 
-void System::Impl::dropTracksLater(const std::vector<std::uint64_t>& ids) {
-  std::lock_guard<std::mutex> lock(drops_mutex);
-  pending_drops.insert(pending_drops.end(), ids.begin(), ids.end());
-}
-
-TrackedFrame System::Impl::trackStage(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  validateImage(image, camera);
-  TrackedFrame f;
-  f.timestamp = timestamp;
-  f.timestamp_text = timestamp_text;
-  if (!std::isfinite(timestamp) || (have_last_stamp && timestamp <= last_stamp)) {
-    f.skipped = true;
-    f.frame_index = next_frame_index;
-    f.message = "frame skipped: timestamp " + std::to_string(timestamp) + " does not follow the previous " +
-                std::to_string(last_stamp);
-    return f;
-  }
-  have_last_stamp = true;
-  last_stamp = timestamp;
-  f.frame_index = next_frame_index++;
-  // Tracks the back end rejected since the last frame stop here (applied before
-  // tracking, so the sequential and the pipelined modes see the same rule).
-  {
-    std::vector<std::uint64_t> drops;
-    {
-      std::lock_guard<std::mutex> lock(drops_mutex);
-      drops.swap(pending_drops);
-    }
-    if (!drops.empty()) tracker.dropTracks(drops);
-  }
-  const auto t0 = std::chrono::steady_clock::now();
-  tracking::TrackerFrame tf = tracker.track(image, timestamp);
-  f.tracks.reserve(tf.points.size());
-  for (const tracking::TrackedPoint& p : tf.points) {
-    FrameTrack t;
-    t.id = p.id;
-    t.uv = p.uv;
-    t.intensity = p.intensity;
-    t.polarity = p.curvature >= 0.f ? 1 : -1;
-    if (!camera.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
-    f.tracks.push_back(t);
-  }
-  f.tracking_ms = elapsedMs(t0);
-  addTiming("tracking", f.tracking_ms);
+TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+  TrackedFrame f = front_end.track(image, timestamp, timestamp_text);
+  if (!f.skipped) addTiming("tracking", f.tracking_ms);
   return f;
 }
 
-FrameResult System::Impl::mapStage(TrackedFrame&& f) {
+FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   FrameResult result;
   result.timestamp = f.timestamp;
   result.state = state;
   result.frame_index = f.frame_index;
-  result.init_retries = init_retries;
+  result.init_retries = counters.init_retries;
   if (f.skipped) {
     result.message = std::move(f.message);
     return result;
   }
-  frame_index = f.frame_index;
-  cur_t = f.timestamp;
-  cur_text = std::move(f.timestamp_text);
-  cur_tracks = std::move(f.tracks);
   result.timing_ms["tracking"] = f.tracking_ms;
+  const double tracking_ms = f.tracking_ms;
+  FrameContext frame = contextOf(std::move(f));
 
   const auto t_start = std::chrono::steady_clock::now();
   if (state == TrackingState::kTracking) {
-    track(&result);
+    track(frame, &result);
   } else {
-    initialize(&result);
+    initialize(frame, &result);
   }
-  result.state = state == TrackingState::kTracking && !result.pose_valid ? TrackingState::kLost : result.state;
-  fillResultPoints(&result);
-  result.num_tracked = cur_tracks.size();
-  result.map_size = map.landmarks().size();
-  result.init_retries = init_retries;
-  // total = the work of both stages for this frame (tracking + mapping).
-  const double total = f.tracking_ms + elapsedMs(t_start);
-  addTiming("total", total);
-  result.timing_ms["total"] = total;
-  ++frames_processed;
-  return result;
-}
-
-FrameResult System::Impl::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  return mapStage(trackStage(image, timestamp, timestamp_text));
-}
-
-void System::Impl::recordPose(std::uint64_t index, double t, const std::string& text, const Eigen::Isometry3d& T_w_c) {
-  if (!T_w_c.matrix().allFinite()) return;
-  TrajectoryEntry e;
-  e.timestamp = t;
-  e.timestamp_text = text;
-  e.T_w_c = T_w_c;
-  trajectory.push_back(e);
-  ++frames_tracked;
-  if (first_init_frame < 0) ++localized_before_init;  // the reference and in-between frames of the first map
-  (void)index;
-}
-
-void System::Impl::fillResultPoints(FrameResult* result) const {
-  result->points.clear();
-  result->points.reserve(cur_tracks.size());
+  if (state == TrackingState::kTracking && !result.pose_valid) result.state = TrackingState::kLost;
+  result.points.reserve(frame.tracks.size());
   std::size_t mapped = 0;
-  for (const FrameTrack& t : cur_tracks) {
+  for (const FrameTrack& t : frame.tracks) {
     FramePoint p;
     p.track_id = t.id;
     p.uv = t.uv;
@@ -150,17 +86,194 @@ void System::Impl::fillResultPoints(FrameResult* result) const {
       p.p_w = l->p_w;
       ++mapped;
     }
-    result->points.push_back(p);
+    result.points.push_back(p);
   }
-  result->num_mapped = mapped;
+  result.num_mapped = mapped;
+  result.num_tracked = frame.tracks.size();
+  result.map_size = map.landmarks().size();
+  result.init_retries = counters.init_retries;
+  // total = the work of both stages for this frame (tracking + mapping).
+  const double total = tracking_ms + elapsedMs(t_start);
+  addTiming("total", total);
+  result.timing_ms["total"] = total;
+  ++counters.frames_processed;
+  return result;
 }
 
-void System::Impl::resetMap() {
+void System::Impl::recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c) {
+  if (!T_w_c.matrix().allFinite()) return;
+  TrajectoryEntry e;
+  e.timestamp = t;
+  e.timestamp_text = text;
+  e.T_w_c = T_w_c;
+  trajectory.push_back(e);
+  ++counters.frames_tracked;
+  if (counters.first_init_frame < 0) ++counters.localized_before_init;  // the reference and in-between frames
+}
+
+void System::Impl::endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame) {
+  if (removed.empty()) return;
+  front_end.dropTracks(removed);
+  frame.lookup(map);
+}
+
+void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
+  const auto t0 = std::chrono::steady_clock::now();
+  state = TrackingState::kInitializing;
+  result->state = TrackingState::kInitializing;
+  // The first map defines the world (first reference camera = origin); after a
+  // loss, the new map continues from the last known pose at the last scale.
+  MapAnchor anchor;
+  if (initialized_once && motion.valid()) {
+    anchor.T_w_ref = motion.lastPose();
+    anchor.scale = scene_depth;
+  }
+  InitAttempt attempt = initializer.addFrame(frame, anchor);
+  if (!attempt.initialized) {
+    result->message = std::move(attempt.message);
+    addTiming("init", elapsedMs(t0));
+    return;
+  }
+  InitialMap& m = attempt.map;
+  map.clear();
+  for (const map::NewLandmark& l : m.landmarks) map.addLandmark(l);
+  map.addKeyframe(std::move(m.reference));
+  map.addKeyframe(std::move(m.current));
+  map.markAllSeen(frame.frame_index);
+  state = TrackingState::kTracking;
+  endTracks(mapper.optimizeWindow(&map), frame);
+
+  // The reference frame and the frames in between, localized against the new map.
+  Eigen::Isometry3d guess = map.keyframes().front().T_w_c;
+  recordPose(m.reference_frame.timestamp, m.reference_frame.timestamp_text, guess);
+  for (const PendingFrame& f : m.between) {
+    const PoseEstimate e = localizer.estimate(map, f.xy, guess);
+    if (!e.ok) continue;
+    recordPose(f.timestamp, f.timestamp_text, e.T_w_c);
+    guess = e.T_w_c;
+  }
+  const Eigen::Isometry3d T_w_c = map.keyframes().back().T_w_c;
+  if (counters.first_init_frame < 0) counters.first_init_frame = static_cast<long long>(frame.frame_index);
+  recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
+  // Motion model from the last localized in-between frame, if any.
+  Eigen::Isometry3d T_prev_cur = Eigen::Isometry3d::Identity();
+  if (trajectory.size() >= 2) T_prev_cur = trajectory[trajectory.size() - 2].T_w_c.inverse() * T_w_c;
+  motion.restart(T_w_c, T_prev_cur);
+  initialized_once = true;
+  frame.lookup(map);
+  mapped_last_frame = frame.numMapped();
+  result->state = TrackingState::kTracking;
+  result->pose_valid = true;
+  result->T_w_c = T_w_c;
+  result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
+                    std::to_string(m.parallax_deg) + " deg" + m.notes;
+  addTiming("init", elapsedMs(t0));
+}
+
+void System::Impl::lose(const std::string& why, FrameResult* result) {
+  ++counters.init_retries;
   map.clear();
   mapped_last_frame = 0;
-  pending.clear();
-  frames_since_keyframe = 0;
+  initializer.reset();
+  state = TrackingState::kLost;
+  result->state = TrackingState::kLost;
+  result->message = "lost: " + why + "; re-initializing";
+}
+
+void System::Impl::track(FrameContext& frame, FrameResult* result) {
+  frame.lookup(map);
+  // Most map points of the previous frame gone at once (a cut, a sudden flip, a
+  // covered lens): the few tracks left are not trusted for a pose.
+  const std::size_t seen_before = mapped_last_frame;
+  const std::size_t seen_now = frame.numMapped();
+  const bool vanished = seen_before >= 100 && seen_now * 5 < seen_before;
+  for (const map::Landmark* l : frame.landmarks) {
+    if (l) map.markSeen(l->id, frame.frame_index);
+  }
+  std::size_t reused = 0;
+  Eigen::Isometry3d T_w_c;
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    PoseEstimate pose;
+    if (vanished) {
+      pose.why = "only " + std::to_string(seen_now) + " of the " + std::to_string(seen_before) +
+                 " map points of the previous frame are still tracked";
+    } else {
+      pose = localizer.estimate(frame, motion.predict());
+      if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
+    }
+    const double ms = elapsedMs(t0);
+    addTiming("pose", ms);
+    result->timing_ms["pose"] = ms;
+    if (!pose.ok) {
+      lose(pose.why, result);
+      initializer.restartFrom(frame);  // this frame is the reference of the next initialization
+      return;
+    }
+    // Localized: new tracks where old map points project take them over.
+    const auto t1 = std::chrono::steady_clock::now();
+    T_w_c = pose.T_w_c;
+    reused = static_cast<std::size_t>(reuse.associate(frame, T_w_c, scene_depth, &map));
+    if (reused > 0) frame.lookup(map);
+    const double reuse_ms = elapsedMs(t1);
+    addTiming("reuse", reuse_ms);
+    result->timing_ms["reuse"] = reuse_ms;
+  }
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    endTracks(mapper.refineFrame(frame, &T_w_c, &map), frame);
+    const double ms = elapsedMs(t0);
+    addTiming("ba", ms);
+    result->timing_ms["ba"] = ms;
+  }
+  // A pose must be finite and must not jump: a step far beyond the scene depth
+  // is a failure, not motion.
+  const double step = (T_w_c.translation() - motion.lastPose().translation()).norm();
+  if (!T_w_c.matrix().allFinite() || step > config.max_step_depth_ratio * scene_depth) {
+    lose("pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")",
+         result);
+    return;
+  }
+  recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
+  motion.update(T_w_c);
+  {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (mapper.needKeyframe(frame, T_w_c, map)) {
+      const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
+      front_end.dropTracks(kf.removed);
+      T_w_c = kf.T_w_c;
+      motion.correctLast(T_w_c);
+      if (!trajectory.empty()) trajectory.back().T_w_c = T_w_c;
+    }
+    // Median depth of the mapped points in view: the map's scale at this place.
+    std::vector<double> depths;
+    const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+    for (const map::Landmark* l : frame.landmarks) {
+      if (l) depths.push_back((T_c_w * l->p_w).z());
+    }
+    if (depths.size() > 20) scene_depth = std::max(1e-6, upperMedian(depths));
+    const double ms = elapsedMs(t0);
+    addTiming("map", ms);
+    result->timing_ms["map"] = ms;
+  }
+  state = TrackingState::kTracking;
+  result->state = TrackingState::kTracking;
+  result->pose_valid = true;
+  result->T_w_c = T_w_c;
+  // Map points handed to tracks by map reuse this frame are left out: they are
+  // mostly on tracks born a frame ago, half of which end at their next step, so
+  // counting them would make ordinary churn look like the map vanishing.
+  mapped_last_frame = frame.numMapped();
+  mapped_last_frame -= std::min(mapped_last_frame, reused);
+}
+
+void System::Impl::reset() {
+  map.clear();
+  mapped_last_frame = 0;
+  initializer.reset();
   state = TrackingState::kInitializing;
+  front_end.reset();
+  motion.invalidate();
 }
 
 System::System(const SystemConfig& config, const camera::Camera& camera) {
@@ -172,18 +285,16 @@ System::System(const SystemConfig& config, const camera::Camera& camera) {
 System::~System() = default;
 
 FrameResult System::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  return impl_->process(image, timestamp, timestamp_text);
+  return impl_->mapFrame(impl_->trackFrame(image, timestamp, timestamp_text));
 }
 
-void System::reset() {
-  impl_->resetMap();
-  impl_->tracker.reset();
-  {
-    std::lock_guard<std::mutex> lock(impl_->drops_mutex);
-    impl_->pending_drops.clear();
-  }
-  impl_->have_last_pose = false;
+TrackedFrame System::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+  return impl_->trackFrame(image, timestamp, timestamp_text);
 }
+
+FrameResult System::mapFrame(TrackedFrame&& frame) { return impl_->mapFrame(std::move(frame)); }
+
+void System::reset() { impl_->reset(); }
 
 const std::vector<TrajectoryEntry>& System::trajectory() const { return impl_->trajectory; }
 
@@ -195,15 +306,16 @@ std::vector<MapPoint3> System::mapPoints() const {
   return out;
 }
 
-std::size_t System::framesProcessed() const { return impl_->frames_processed; }
-std::size_t System::framesTracked() const { return impl_->frames_tracked; }
-std::size_t System::reusedMapPoints() const { return impl_->reused_points; }
+std::size_t System::framesProcessed() const { return impl_->counters.frames_processed; }
+std::size_t System::framesTracked() const { return impl_->counters.frames_tracked; }
+std::size_t System::reusedMapPoints() const { return impl_->reuse.totalReused(); }
 std::size_t System::dormantMapPoints() const { return impl_->map.dormant().size(); }
-long long System::firstInitFrame() const { return impl_->first_init_frame; }
+long long System::firstInitFrame() const { return impl_->counters.first_init_frame; }
 std::size_t System::framesTrackedSinceInit() const {
-  return impl_->first_init_frame < 0 ? 0 : impl_->frames_tracked - impl_->localized_before_init;
+  const RunCounters& c = impl_->counters;
+  return c.first_init_frame < 0 ? 0 : c.frames_tracked - c.localized_before_init;
 }
-int System::initRetries() const { return impl_->init_retries; }
+int System::initRetries() const { return impl_->counters.init_retries; }
 const StageTimings& System::timings() const { return impl_->timings; }
 const SystemConfig& System::config() const { return impl_->config; }
 const camera::Camera& System::camera() const { return impl_->camera; }

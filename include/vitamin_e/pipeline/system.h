@@ -13,7 +13,9 @@
 #include "vitamin_e/camera/camera.h"
 #include "vitamin_e/common/timing.h"
 #include "vitamin_e/pipeline/frame_result.h"
+#include "vitamin_e/pipeline/front_end.h"
 #include "vitamin_e/pipeline/system_config.h"
+#include "vitamin_e/pipeline/tracked_frame.h"
 
 namespace vitamin_e::pipeline {
 
@@ -41,6 +43,13 @@ class System {
   // (a frame whose stamp does not increase is skipped: state kLost, message set).
   FrameResult process(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
 
+  // The two stages of process(), as PipelinedSystem runs them on two threads:
+  // trackFrame (tracking, undistortion) and mapFrame (initialization, pose, BA,
+  // map). One thread may call each; they share only thread-safe state (the
+  // timings and the tracks the mapping stage ends). process() = mapFrame(trackFrame()).
+  TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
+  FrameResult mapFrame(TrackedFrame&& frame);
+
   // Forgets map and tracks; the trajectory so far is kept.
   void reset();
 
@@ -67,14 +76,9 @@ class System {
   const camera::Camera& camera() const;
 
  private:
-  friend class PipelinedSystem;  // runs the two stages of process() on two threads
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-// Throws std::invalid_argument unless image is a non-empty CV_8UC1 of the
-// camera's size (the message names both sizes).
-void validateImage(const cv::Mat& image, const camera::Camera& camera);
 
 // The frame's triangulated points in its camera frame (p_c = T_w_c^-1 p_w) with
 // their track ids: the input of the dense reconstruction. Empty unless the

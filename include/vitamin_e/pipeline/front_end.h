@@ -1,0 +1,46 @@
+#pragma once
+// The tracking stage: image -> TrackedFrame (dense curvature-extrema tracks,
+// undistorted). Owns the tracker and the stream's stamp order. The mapping
+// stage may run on another thread: its only way back is dropTracks().
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vitamin_e/camera/camera.h"
+#include "vitamin_e/pipeline/tracked_frame.h"
+#include "vitamin_e/tracking/dense_tracker.h"
+
+namespace vitamin_e::pipeline {
+
+// Throws std::invalid_argument unless image is a non-empty CV_8UC1 of the
+// camera's size (the message names both sizes).
+void validateImage(const cv::Mat& image, const camera::Camera& camera);
+
+class FrontEnd {
+ public:
+  FrontEnd(const tracking::TrackerConfig& config, const camera::Camera& camera);
+
+  // Tracks one image (validated: std::invalid_argument). A stamp that is not
+  // finite or does not increase gives a skipped frame and leaves the tracker as it was.
+  TrackedFrame track(const cv::Mat& image, double timestamp, const std::string& timestamp_text);
+  // Tracks the mapping stage rejected: they end before the next image is
+  // tracked (the same rule in the sequential and the pipelined mode). Thread-safe.
+  void dropTracks(const std::vector<std::uint64_t>& ids);
+  // Forgets every track and pending drop; the stamp order is kept.
+  void reset();
+  const camera::Camera& camera() const { return camera_; }
+
+ private:
+  camera::Camera camera_;
+  tracking::DenseTracker tracker_;
+  std::uint64_t next_frame_index_ = 0;
+  bool have_last_stamp_ = false;
+  double last_stamp_ = 0.0;
+  std::mutex drops_mutex_;
+  std::vector<std::uint64_t> pending_drops_;
+};
+
+}  // namespace vitamin_e::pipeline

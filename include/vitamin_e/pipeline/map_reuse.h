@@ -1,0 +1,37 @@
+#pragma once
+// Map reuse: a new track that appears where an existing map point projects takes
+// that point over instead of being triangulated again from the newest (and
+// drifted) keyframes. Candidates are the window's landmarks whose track ended
+// and the dormant landmarks that left the window; an association needs the same
+// curvature sign, no other track nearer to the projection, and no mapped point
+// clearly in front of it (the depth of the map points tracked around it).
+#include <cstdint>
+
+#include <Eigen/Geometry>
+
+#include "vitamin_e/camera/camera.h"
+#include "vitamin_e/map/map.h"
+#include "vitamin_e/pipeline/frame_context.h"
+#include "vitamin_e/pipeline/system_config.h"
+
+namespace vitamin_e::pipeline {
+
+class MapReuse {
+ public:
+  MapReuse(const SystemConfig& config, const camera::Camera& camera);
+  // Hands map points to the frame's unmapped tracks, at pose T_w_c (localized).
+  // scene_depth: the map's median depth here (a floor on the depths considered).
+  // Returns how many were taken over; the frame's landmarks must be looked up again.
+  int associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth, map::Map* map);
+  std::uint64_t totalReused() const { return total_reused_; }
+
+ private:
+  double radius_px_;
+  double occlusion_ratio_;
+  std::size_t dormant_per_frame_;
+  camera::Camera camera_;
+  std::uint64_t dormant_cursor_ = 0;  // next dormant entry to check (in retirement order, see Map::dormantDropped)
+  std::uint64_t total_reused_ = 0;
+};
+
+}  // namespace vitamin_e::pipeline

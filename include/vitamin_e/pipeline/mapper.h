@@ -1,0 +1,49 @@
+#pragma once
+// The back end: bundle adjustment on every frame (subspace Gauss-Newton; the
+// frame's camera and the points it sees), keyframes by parallax, triangulation
+// of new tracks, and the keyframe window BA. Works on the Map through its
+// interface; landmarks it removes are returned so that their tracks can end.
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "vitamin_e/camera/camera.h"
+#include "vitamin_e/map/map.h"
+#include "vitamin_e/pipeline/frame_context.h"
+#include "vitamin_e/pipeline/system_config.h"
+
+namespace vitamin_e::pipeline {
+
+struct KeyframeUpdate {
+  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // the new keyframe's pose after the window BA
+  int triangulated = 0;                 // new landmarks
+  std::vector<std::uint64_t> removed;   // landmarks removed as outliers (their tracks must end)
+};
+
+class Mapper {
+ public:
+  Mapper(const SystemConfig& config, const camera::Camera& camera);
+
+  // Per-frame BA: the frame's camera and the points it sees are free, the
+  // keyframes fixed. Updates *T_w_c and the points; returns the removed landmarks.
+  std::vector<std::uint64_t> refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
+  // Keyframe BA over the window (the newest keyframes free, the oldest fixed).
+  std::vector<std::uint64_t> optimizeWindow(map::Map* map) const;
+  bool needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const;
+  // Inserts the frame as a keyframe, triangulates its unmapped tracks and runs
+  // the window BA. frame->landmarks is looked up again.
+  KeyframeUpdate addKeyframe(FrameContext* frame, const Eigen::Isometry3d& T_w_c, map::Map* map) const;
+  // Counts one more offence for each landmark; removes those at the limit
+  // (pipeline.max_outlier_count) and returns their ids.
+  std::vector<std::uint64_t> penalize(const std::vector<std::uint64_t>& ids, map::Map* map) const;
+
+ private:
+  std::vector<std::uint64_t> bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
+  int triangulate(const FrameContext& frame, map::Map* map) const;
+
+  SystemConfig config_;
+  camera::Camera camera_;
+};
+
+}  // namespace vitamin_e::pipeline

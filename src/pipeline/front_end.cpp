@@ -1,0 +1,76 @@
+#include "vitamin_e/pipeline/front_end.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "vitamin_e/common/timing.h"
+
+namespace vitamin_e::pipeline {
+
+void validateImage(const cv::Mat& image, const camera::Camera& camera) {
+  if (image.empty() || image.type() != CV_8UC1) {
+    throw std::invalid_argument("SLAM input: expected a non-empty 8-bit single-channel (mono8) image");
+  }
+  if (image.cols != camera.width() || image.rows != camera.height()) {
+    throw std::invalid_argument("SLAM input: image is " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + " but the calibration is " +
+                                std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+  }
+}
+
+FrontEnd::FrontEnd(const tracking::TrackerConfig& config, const camera::Camera& camera)
+    : camera_(camera), tracker_(config) {}
+
+TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+  validateImage(image, camera_);
+  TrackedFrame f;
+  f.timestamp = timestamp;
+  f.timestamp_text = timestamp_text;
+  if (!std::isfinite(timestamp) || (have_last_stamp_ && timestamp <= last_stamp_)) {
+    f.skipped = true;
+    f.frame_index = next_frame_index_;
+    f.message = "frame skipped: timestamp " + std::to_string(timestamp) + " does not follow the previous " +
+                std::to_string(last_stamp_);
+    return f;
+  }
+  have_last_stamp_ = true;
+  last_stamp_ = timestamp;
+  f.frame_index = next_frame_index_++;
+  {
+    std::vector<std::uint64_t> drops;
+    {
+      std::lock_guard<std::mutex> lock(drops_mutex_);
+      drops.swap(pending_drops_);
+    }
+    if (!drops.empty()) tracker_.dropTracks(drops);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  tracking::TrackerFrame tf = tracker_.track(image, timestamp);
+  f.tracks.reserve(tf.points.size());
+  for (const tracking::TrackedPoint& p : tf.points) {
+    FrameTrack t;
+    t.id = p.id;
+    t.uv = p.uv;
+    t.intensity = p.intensity;
+    t.polarity = p.curvature >= 0.f ? 1 : -1;
+    if (!camera_.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
+    f.tracks.push_back(t);
+  }
+  f.tracking_ms = elapsedMs(t0);
+  return f;
+}
+
+void FrontEnd::dropTracks(const std::vector<std::uint64_t>& ids) {
+  if (ids.empty()) return;
+  std::lock_guard<std::mutex> lock(drops_mutex_);
+  pending_drops_.insert(pending_drops_.end(), ids.begin(), ids.end());
+}
+
+void FrontEnd::reset() {
+  tracker_.reset();
+  std::lock_guard<std::mutex> lock(drops_mutex_);
+  pending_drops_.clear();
+}
+
+}  // namespace vitamin_e::pipeline

@@ -1,0 +1,59 @@
+#include "vitamin_e/pipeline/localizer.h"
+
+namespace vitamin_e::pipeline {
+
+Localizer::Localizer(const SystemConfig& config) : pnp_(config.pnp), min_inliers_(config.min_pose_inliers) {}
+
+PoseEstimate Localizer::estimate(const FrameContext& frame, const Eigen::Isometry3d& guess) const {
+  std::vector<Eigen::Vector3d> p_w;
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<std::uint64_t> ids;
+  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
+    if (const map::Landmark* l = frame.landmarks[i]) {
+      p_w.push_back(l->p_w);
+      xy.push_back(frame.tracks[i].xy);
+      ids.push_back(l->id);
+    }
+  }
+  return solve(p_w, xy, ids, guess);
+}
+
+PoseEstimate Localizer::estimate(const map::Map& map, const std::unordered_map<std::uint64_t, Eigen::Vector2d>& xy,
+                                 const Eigen::Isometry3d& guess) const {
+  std::vector<Eigen::Vector3d> p_w;
+  std::vector<Eigen::Vector2d> obs;
+  std::vector<std::uint64_t> ids;
+  for (const auto& kv : xy) {
+    if (const map::Landmark* l = map.landmark(kv.first)) {
+      p_w.push_back(l->p_w);
+      obs.push_back(kv.second);
+      ids.push_back(l->id);
+    }
+  }
+  return solve(p_w, obs, ids, guess);
+}
+
+PoseEstimate Localizer::solve(const std::vector<Eigen::Vector3d>& p_w, const std::vector<Eigen::Vector2d>& xy,
+                              const std::vector<std::uint64_t>& ids, const Eigen::Isometry3d& guess) const {
+  PoseEstimate e;
+  e.num_points = static_cast<int>(p_w.size());
+  if (e.num_points < min_inliers_) {
+    e.why = "only " + std::to_string(p_w.size()) + " tracked map points";
+    return e;
+  }
+  const geometry::PnpResult r = geometry::solvePnpRansac(p_w, xy, pnp_, &guess);
+  e.num_inliers = r.num_inliers;
+  if (!r.ok || r.num_inliers < min_inliers_) {
+    e.why = "pose estimation failed (" + std::to_string(r.num_inliers) + " inliers of " + std::to_string(p_w.size()) +
+            ")";
+    return e;
+  }
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (i < r.inliers.size() && !r.inliers[i]) e.outliers.push_back(ids[i]);
+  }
+  e.ok = true;
+  e.T_w_c = r.T_w_c;
+  return e;
+}
+
+}  // namespace vitamin_e::pipeline

@@ -1,0 +1,208 @@
+#include "vitamin_e/pipeline/mapper.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+#include "vitamin_e/common/timing.h"
+#include "vitamin_e/geometry/triangulation.h"
+#include "vitamin_e/optimization/subspace_gn.h"
+
+namespace vitamin_e::pipeline {
+
+Mapper::Mapper(const SystemConfig& config, const camera::Camera& camera) : config_(config), camera_(camera) {}
+
+std::vector<std::uint64_t> Mapper::refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c,
+                                               map::Map* map) const {
+  return bundleAdjust(&frame, T_w_c, map);
+}
+
+std::vector<std::uint64_t> Mapper::optimizeWindow(map::Map* map) const { return bundleAdjust(nullptr, nullptr, map); }
+
+std::vector<std::uint64_t> Mapper::penalize(const std::vector<std::uint64_t>& ids, map::Map* map) const {
+  std::vector<std::uint64_t> removed;
+  for (std::uint64_t id : ids) {
+    if (map->flagOutlier(id) >= config_.max_outlier_count) removed.push_back(id);
+  }
+  for (std::uint64_t id : removed) map->removeLandmark(id);
+  return removed;
+}
+
+// frame == null: keyframe window BA; otherwise the per-frame BA of frame at *T_w_c.
+std::vector<std::uint64_t> Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c,
+                                                map::Map* map) const {
+  const bool keyframe_window = frame == nullptr;
+  optimization::BaProblem problem;
+  problem.fx = camera_.fx();
+  problem.fy = camera_.fy();
+  problem.cx = camera_.cx();
+  problem.cy = camera_.cy();
+  const auto& kfs = map->keyframes();
+  // Cameras: the window's keyframes; in per-frame mode the current frame is
+  // appended as the only free camera.
+  // Keyframe BA: the newest ba_free_keyframes are free, never the oldest
+  // ba_fixed_keyframes (gauge: pose and scale); with two keyframes only the
+  // first is fixed.
+  const int num_kf = static_cast<int>(kfs.size());
+  const int first_free =
+      std::max(std::min(config_.ba_fixed_keyframes, num_kf - 1), num_kf - config_.ba_free_keyframes);
+  for (int k = 0; k < num_kf; ++k) {
+    optimization::BaCamera c;
+    c.T_w_c = kfs[k].T_w_c;
+    c.fixed = !keyframe_window || k < first_free;
+    problem.cameras.push_back(c);
+  }
+  int current_cam = -1;
+  if (!keyframe_window) {
+    optimization::BaCamera c;
+    c.T_w_c = *T_w_c;
+    c.fixed = false;
+    current_cam = static_cast<int>(problem.cameras.size());
+    problem.cameras.push_back(c);
+  }
+  // Keyframe frame index -> camera index (the window is small).
+  auto camera_of = [&](std::uint64_t keyframe) -> int {
+    for (int k = num_kf - 1; k >= 0; --k) {
+      if (kfs[k].frame_index == keyframe) return k;
+    }
+    return -1;
+  };
+  auto to_px = [&](const Eigen::Vector2d& xy) {
+    return Eigen::Vector2d(camera_.fx() * xy.x() + camera_.cx(), camera_.fy() * xy.y() + camera_.cy());
+  };
+  // Points: per frame, those the current frame sees; per keyframe, those the
+  // free keyframes see. Each comes with all its keyframe observations.
+  std::vector<const map::Landmark*> points;
+  // A point seen by fewer than two cameras of the problem has no depth: fixed.
+  // So are revived points, if configured: they anchor the pose to the older map.
+  auto add_point = [&](const map::Landmark* l, int extra_observations) {
+    const int idx = static_cast<int>(problem.points.size());
+    problem.points.push_back({l->p_w, false});
+    points.push_back(l);
+    int seen = extra_observations;
+    for (const map::LandmarkObservation& o : l->observations) {
+      const int cam = camera_of(o.keyframe);
+      if (cam >= 0) {
+        problem.observations.push_back({cam, idx, to_px(o.xy)});
+        ++seen;
+      }
+    }
+    problem.points.back().fixed = seen < 2 || (l->revived && config_.reuse_fix_revived);
+    return idx;
+  };
+  if (keyframe_window) {
+    std::unordered_set<std::uint64_t> added;
+    for (int k = first_free; k < num_kf; ++k) {
+      for (const auto& obs : kfs[k].observations) {
+        const map::Landmark* l = map->landmark(obs.first);
+        if (l && added.insert(obs.first).second) add_point(l, 0);
+      }
+    }
+  } else {
+    for (std::size_t i = 0; i < frame->tracks.size(); ++i) {
+      const map::Landmark* l = frame->landmarks[i];
+      if (!l) continue;
+      const int p = add_point(l, 1);
+      problem.observations.push_back({current_cam, p, to_px(frame->tracks[i].xy)});
+    }
+  }
+  if (problem.points.empty()) return {};
+  optimization::BaOptions options = config_.ba;
+  options.max_sweeps = keyframe_window ? config_.ba_keyframe_sweeps : config_.ba_frame_sweeps;
+  const optimization::BaSummary summary = optimization::solveSubspaceGaussNewton(problem, options);
+
+  // Write back (only finite results).
+  for (std::size_t k = 0; k < kfs.size(); ++k) {
+    if (problem.cameras[k].T_w_c.matrix().allFinite()) map->setKeyframePose(k, problem.cameras[k].T_w_c);
+  }
+  if (current_cam >= 0 && problem.cameras[current_cam].T_w_c.matrix().allFinite()) {
+    *T_w_c = problem.cameras[current_cam].T_w_c;
+  }
+  std::vector<std::uint64_t> ids(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    ids[i] = points[i]->id;
+    if (problem.points[i].p_w.allFinite()) map->setLandmarkPosition(ids[i], problem.points[i].p_w);
+  }
+  // Observations far off after the optimization mark their points; repeated
+  // offenders are removed from the map and their tracks dropped.
+  std::vector<bool> bad(points.size(), false);
+  for (std::size_t o = 0; o < problem.observations.size() && o < summary.residual_px.size(); ++o) {
+    if (summary.residual_px[o] > config_.max_reprojection_px) bad[problem.observations[o].point] = true;
+  }
+  std::vector<std::uint64_t> offenders;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (bad[i]) offenders.push_back(ids[i]);
+  }
+  return penalize(offenders, map);
+}
+
+bool Mapper::needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const {
+  if (map.keyframes().empty()) return true;
+  const map::Keyframe& kf = map.keyframes().back();
+  const Eigen::Matrix3d R_cur_kf = (T_w_c.inverse() * kf.T_w_c).rotation();
+  std::vector<double> parallax;
+  std::size_t mapped = 0;
+  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
+    const FrameTrack& t = frame.tracks[i];
+    if (frame.landmarks[i]) ++mapped;
+    auto it = kf.observations.find(t.id);
+    if (it == kf.observations.end()) continue;
+    const Eigen::Vector3d f = R_cur_kf * it->second.homogeneous();
+    if (f.z() <= 1e-9) continue;
+    parallax.push_back((f.hnormalized() - t.xy).norm() * camera_.fx());
+  }
+  const double med = upperMedian(parallax);
+  if (med >= config_.keyframe_parallax_px) return true;
+  const double mapped_ratio =
+      frame.tracks.empty() ? 0.0 : static_cast<double>(mapped) / static_cast<double>(frame.tracks.size());
+  return mapped_ratio < config_.keyframe_min_mapped_ratio && med >= 0.3 * config_.keyframe_parallax_px;
+}
+
+KeyframeUpdate Mapper::addKeyframe(FrameContext* frame, const Eigen::Isometry3d& T_w_c, map::Map* map) const {
+  map::Keyframe kf;
+  kf.frame_index = frame->frame_index;
+  kf.timestamp = frame->timestamp;
+  kf.T_w_c = T_w_c;
+  for (const FrameTrack& t : frame->tracks) kf.observations.emplace(t.id, t.xy);
+  map->addKeyframe(std::move(kf));
+  KeyframeUpdate out;
+  out.triangulated = triangulate(*frame, map);
+  frame->lookup(*map);
+  out.removed = optimizeWindow(map);
+  if (!out.removed.empty()) frame->lookup(*map);
+  out.T_w_c = map->keyframes().back().T_w_c;
+  return out;
+}
+
+int Mapper::triangulate(const FrameContext& frame, map::Map* map) const {
+  const auto& kfs = map->keyframes();
+  int created = 0;
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Eigen::Vector2d> obs;
+  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
+    const FrameTrack& t = frame.tracks[i];
+    if (frame.landmarks[i]) continue;
+    poses.clear();
+    obs.clear();
+    for (const map::Keyframe& kf : kfs) {
+      auto it = kf.observations.find(t.id);
+      if (it == kf.observations.end()) continue;
+      poses.push_back(kf.T_w_c);
+      obs.push_back(it->second);
+    }
+    if (poses.size() < 2) continue;
+    geometry::TriangulationResult tr = geometry::triangulatePoint(poses, obs, config_.triangulation);
+    if (!tr.ok) continue;
+    map::NewLandmark l;
+    l.id = t.id;
+    l.p_w = tr.p_w;
+    l.intensity = t.intensity;
+    l.polarity = t.polarity;
+    l.seen_frame = frame.frame_index;
+    map->addLandmark(l);
+    ++created;
+  }
+  return created;
+}
+
+}  // namespace vitamin_e::pipeline
