@@ -314,6 +314,7 @@ int run(const Options& o) {
   stats.interrupted = g_stop != 0;
   stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
   stats.init_retries = system.initRetries();
+  stats.relocalizations = system.relocalizations();
   // Frames seen while initializing are localized once the map exists: the
   // system's count (= trajectory poses) is the number of tracked frames.
   stats.tracked_frames = system.framesTracked();
@@ -334,9 +335,11 @@ int run(const Options& o) {
 
   if (!o.quiet) {
     if (stats.interrupted) std::fprintf(stderr, "[vitamin_e_run] interrupted: outputs hold the frames so far\n");
-    std::fprintf(stderr, "[vitamin_e_run] %zu frames, %zu tracked (%.1f%%), %zu skipped, %d init retries, %zu map points\n",
+    std::fprintf(stderr,
+                 "[vitamin_e_run] %zu frames, %zu tracked (%.1f%%), %zu skipped, %d init retries, %d relocalizations, "
+                 "%zu map points\n",
                  stats.frames, stats.tracked_frames, 100.0 * stats.successRate(), stats.skipped_frames,
-                 stats.init_retries, stats.map_points);
+                 stats.init_retries, stats.relocalizations, stats.map_points);
     std::fprintf(stderr, "%s", io::timingTable(stats.timing).c_str());
     std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s%s%s (peak RSS %.0f MB)\n", traj_path.c_str(),
                  stats_path.c_str(), ply_path.c_str(), dense ? ", " : "", dense ? mesh_path.c_str() : "",

@@ -100,6 +100,7 @@ std::string toJson(const RunStats& s) {
   os << "  \"success_rate\": " << number(s.successRate()) << ",\n";
   os << "  \"skipped_frames\": " << s.skipped_frames << ",\n";
   os << "  \"init_retries\": " << s.init_retries << ",\n";
+  os << "  \"relocalizations\": " << s.relocalizations << ",\n";
   os << "  \"first_init_frame\": " << s.first_init_frame << ",\n";
   os << "  \"tracked_since_init\": " << s.tracked_since_init << ",\n";
   os << "  \"reused_map_points\": " << s.reused_map_points << ",\n";

@@ -37,6 +37,7 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
   have_last_stamp_ = true;
   last_stamp_ = timestamp;
   f.frame_index = next_frame_index_++;
+  f.image = image;
   {
     std::vector<std::uint64_t> drops;
     {

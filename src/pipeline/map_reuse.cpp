@@ -91,7 +91,7 @@ MapReuse::MapReuse(const SystemConfig& config, const camera::Camera& camera)
       camera_(camera) {}
 
 int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth,
-                        map::Map* map) {
+                        map::Map* map, bool all_dormant) {
   const double radius = radius_px_;
   const std::vector<FrameTrack>& tracks = frame.tracks;
   const std::vector<const map::Landmark*>& landmarks = frame.landmarks;
@@ -149,7 +149,7 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
   // Dormant landmarks, a bounded slice per frame in round robin: a new track
   // stays unmapped until the next keyframe, so it is met by several slices.
   const auto& dormant = map->dormant();
-  const std::size_t budget = std::min<std::size_t>(dormant.size(), dormant_per_frame_);
+  const std::size_t budget = all_dormant ? dormant.size() : std::min<std::size_t>(dormant.size(), dormant_per_frame_);
   const std::uint64_t dropped = map->dormantDropped();
   std::size_t start = dormant_cursor_ > dropped ? static_cast<std::size_t>(dormant_cursor_ - dropped) : 0;
   if (start >= dormant.size()) start = 0;

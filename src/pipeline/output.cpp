@@ -13,6 +13,7 @@ const char* toString(TrackingState state) {
     case TrackingState::kInitializing: return "initializing";
     case TrackingState::kTracking: return "tracking";
     case TrackingState::kLost: return "lost";
+    case TrackingState::kRelocalizing: return "relocalizing";
   }
   return "unknown";
 }

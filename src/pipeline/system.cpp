@@ -28,6 +28,7 @@ FrameContext contextOf(TrackedFrame&& f) {
   frame.timestamp = f.timestamp;
   frame.timestamp_text = std::move(f.timestamp_text);
   frame.tracks = std::move(f.tracks);
+  frame.image = std::move(f.image);
   return frame;
 }
 }  // namespace
@@ -40,6 +41,7 @@ System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
       localizer(config),
       reuse(config, cam),
       mapper(config, cam),
+      relocalizer(config.relocalization, cam, config.pnp),
       map(cfg.map) {}
 
 void System::Impl::addTiming(const std::string& stage, double ms) {
@@ -59,6 +61,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   result.state = state;
   result.frame_index = f.frame_index;
   result.init_retries = counters.init_retries;
+  result.relocalizations = counters.relocalizations;
   if (f.skipped) {
     result.message = std::move(f.message);
     return result;
@@ -70,6 +73,8 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   const auto t_start = std::chrono::steady_clock::now();
   if (state == TrackingState::kTracking) {
     track(frame, &result);
+  } else if (state == TrackingState::kRelocalizing) {
+    relocalize(frame, &result);
   } else {
     initialize(frame, &result);
   }
@@ -92,6 +97,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   result.num_tracked = frame.tracks.size();
   result.map_size = map.landmarks().size();
   result.init_retries = counters.init_retries;
+  result.relocalizations = counters.relocalizations;
   // total = the work of both stages for this frame (tracking + mapping).
   const double total = tracking_ms + elapsedMs(t_start);
   addTiming("total", total);
@@ -162,6 +168,7 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   initialized_once = true;
   frame.lookup(map);
   mapped_last_frame = frame.numMapped();
+  relocalizer.addKeyframe(frame.image, frame, T_w_c);
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_c;
@@ -170,14 +177,102 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   addTiming("init", elapsedMs(t0));
 }
 
-void System::Impl::lose(const std::string& why, FrameResult* result) {
+// Tracking failed at this frame: look for the camera in the map, or (when
+// there is nothing to relocalize against) start a new map.
+void System::Impl::lose(const FrameContext& frame, const std::string& why, bool restart_from_frame,
+                        FrameResult* result) {
+  result->state = TrackingState::kLost;
+  if (config.relocalization.enabled && relocalizer.size() > 0) {
+    state = TrackingState::kRelocalizing;
+    lost_frames = 0;
+    result->message = "lost: " + why + "; relocalizing";
+    return;
+  }
+  reinitialize(why, result);
+  result->state = TrackingState::kLost;
+  // This frame is the reference of the next initialization.
+  if (restart_from_frame) initializer.restartFrom(frame);
+}
+
+void System::Impl::reinitialize(const std::string& why, FrameResult* result) {
   ++counters.init_retries;
   map.clear();
+  relocalizer.clear();  // the new map has its own scale: the old keyframes do not fit it
   mapped_last_frame = 0;
   initializer.reset();
   state = TrackingState::kLost;
-  result->state = TrackingState::kLost;
   result->message = "lost: " + why + "; re-initializing";
+}
+
+void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
+  const auto t0 = std::chrono::steady_clock::now();
+  result->state = TrackingState::kRelocalizing;
+  // A short loss (a blurred frame): the tracks that still see map points may give the pose again.
+  frame.lookup(map);
+  if (static_cast<int>(frame.numMapped()) >= config.min_pose_inliers) {
+    const PoseEstimate pose = localizer.estimate(frame, motion.predict());
+    if (pose.ok && resume(frame, pose.T_w_c, result)) {
+      ++counters.relocalizations;
+      result->message = "relocalized from the tracked map points (" + std::to_string(pose.num_inliers) + " of " +
+                        std::to_string(pose.num_points) + ")";
+      addTiming("relocalize", elapsedMs(t0));
+      return;
+    }
+  }
+  const Relocalization r = relocalizer.relocalize(frame.image, frame, map);
+  if (r.ok && resume(frame, r.T_w_c, result)) {
+    ++counters.relocalizations;
+    result->message = "relocalized against keyframe " + std::to_string(r.keyframe) + " (" +
+                      std::to_string(r.inliers) + " of " + std::to_string(r.matches) + " matches" +
+                      (r.quarter_turns == 2 ? ", camera upside down" : "") + ")";
+    addTiming("relocalize", elapsedMs(t0));
+    return;
+  }
+  // Frames too poor to initialize on (black, covered) do not use up the wait.
+  if (static_cast<int>(frame.tracks.size()) >= config.min_init_tracks) ++lost_frames;
+  if (lost_frames >= config.relocalization.max_frames) {
+    reinitialize("not relocalized in " + std::to_string(lost_frames) + " frames", result);
+    initializer.restartFrom(frame);
+    result->state = TrackingState::kLost;
+  } else {
+    result->message = "relocalizing: " + (r.ok ? std::string("the pose found did not hold") : r.why);
+  }
+  addTiming("relocalize", elapsedMs(t0));
+}
+
+// Continues tracking from a relocalized pose: map points are handed to the
+// frame's tracks around it, the pose is estimated and refined with them, and
+// the frame becomes a keyframe so that new points are triangulated from it.
+bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result) {
+  frame.lookup(map);
+  std::size_t reused = static_cast<std::size_t>(reuse.associate(frame, T_w_guess, scene_depth, &map, true));
+  frame.lookup(map);
+  const PoseEstimate pose = localizer.estimate(frame, T_w_guess);
+  if (!pose.ok) return false;
+  endTracks(mapper.penalize(pose.outliers, &map), frame);
+  Eigen::Isometry3d T_w_c = pose.T_w_c;
+  reused += static_cast<std::size_t>(reuse.associate(frame, T_w_c, scene_depth, &map, true));
+  frame.lookup(map);
+  endTracks(mapper.refineFrame(frame, &T_w_c, &map), frame);
+  if (!T_w_c.matrix().allFinite()) return false;
+  for (const map::Landmark* l : frame.landmarks) {
+    if (l) map.markSeen(l->id, frame.frame_index);
+  }
+  recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
+  motion.restart(T_w_c, Eigen::Isometry3d::Identity());
+  const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
+  front_end.dropTracks(kf.removed);
+  T_w_c = kf.T_w_c;
+  motion.correctLast(T_w_c);
+  trajectory.back().T_w_c = T_w_c;
+  relocalizer.addKeyframe(frame.image, frame, T_w_c);
+  state = TrackingState::kTracking;
+  result->state = TrackingState::kTracking;
+  result->pose_valid = true;
+  result->T_w_c = T_w_c;
+  mapped_last_frame = frame.numMapped();
+  mapped_last_frame -= std::min(mapped_last_frame, reused);
+  return true;
 }
 
 void System::Impl::track(FrameContext& frame, FrameResult* result) {
@@ -206,8 +301,7 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
     addTiming("pose", ms);
     result->timing_ms["pose"] = ms;
     if (!pose.ok) {
-      lose(pose.why, result);
-      initializer.restartFrom(frame);  // this frame is the reference of the next initialization
+      lose(frame, pose.why, true, result);
       return;
     }
     // Localized: new tracks where old map points project take them over.
@@ -230,8 +324,8 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   // is a failure, not motion.
   const double step = (T_w_c.translation() - motion.lastPose().translation()).norm();
   if (!T_w_c.matrix().allFinite() || step > config.max_step_depth_ratio * scene_depth) {
-    lose("pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")",
-         result);
+    lose(frame, "pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")",
+         false, result);
     return;
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
@@ -244,6 +338,7 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
       T_w_c = kf.T_w_c;
       motion.correctLast(T_w_c);
       if (!trajectory.empty()) trajectory.back().T_w_c = T_w_c;
+      relocalizer.addKeyframe(frame.image, frame, T_w_c);
     }
     // Median depth of the mapped points in view: the map's scale at this place.
     std::vector<double> depths;
@@ -269,6 +364,8 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
 
 void System::Impl::reset() {
   map.clear();
+  relocalizer.clear();
+  lost_frames = 0;
   mapped_last_frame = 0;
   initializer.reset();
   state = TrackingState::kInitializing;
@@ -316,6 +413,7 @@ std::size_t System::framesTrackedSinceInit() const {
   return c.first_init_frame < 0 ? 0 : c.frames_tracked - c.localized_before_init;
 }
 int System::initRetries() const { return impl_->counters.init_retries; }
+int System::relocalizations() const { return impl_->counters.relocalizations; }
 const StageTimings& System::timings() const { return impl_->timings; }
 const SystemConfig& System::config() const { return impl_->config; }
 const camera::Camera& System::camera() const { return impl_->camera; }

@@ -183,6 +183,21 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("pnp", "robust_sigma_px", &pn.robust_sigma_px));
   f.push_back(field("pnp", "refine_iterations", &pn.refine_iterations));
   f.push_back(field("pnp", "guess_min_inlier_ratio", &pn.guess_min_inlier_ratio));
+  // relocalization
+  auto& r = c.relocalization;
+  f.push_back(field("relocalization", "enabled", &r.enabled));
+  f.push_back(field("relocalization", "max_frames", &r.max_frames));
+  f.push_back(field("relocalization", "max_keyframes", &r.max_keyframes));
+  f.push_back(field("relocalization", "points_per_keyframe", &r.points_per_keyframe));
+  f.push_back(field("relocalization", "query_points", &r.query_points));
+  f.push_back(field("relocalization", "candidates", &r.candidates));
+  f.push_back(field("relocalization", "patch_size", &r.patch_size));
+  f.push_back(field("relocalization", "smoothing_sigma", &r.smoothing_sigma));
+  f.push_back(field("relocalization", "max_distance", &r.max_distance));
+  f.push_back(field("relocalization", "ratio", &r.ratio));
+  f.push_back(field("relocalization", "min_inliers", &r.min_inliers));
+  f.push_back(field("relocalization", "min_inlier_ratio", &r.min_inlier_ratio));
+  f.push_back(field("relocalization", "upside_down", &r.upside_down));
   return f;
 }
 
@@ -262,6 +277,7 @@ void SystemConfig::validate() const {
     ba.validate();
     dense.validate();
     map.validate();
+    relocalization.validate();
   } catch (const ConfigError&) {
     throw;
   } catch (const std::exception& e) {

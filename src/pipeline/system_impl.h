@@ -13,6 +13,7 @@
 #include "vitamin_e/pipeline/map_reuse.h"
 #include "vitamin_e/pipeline/mapper.h"
 #include "vitamin_e/pipeline/motion_model.h"
+#include "vitamin_e/pipeline/relocalizer.h"
 #include "vitamin_e/pipeline/system.h"
 
 namespace vitamin_e::pipeline {
@@ -23,7 +24,8 @@ struct RunCounters {
   std::uint64_t frames_tracked = 0;
   long long first_init_frame = -1;          // frame index of the first successful initialization
   std::uint64_t localized_before_init = 0;  // poses recorded for frames before it
-  int init_retries = 0;
+  int init_retries = 0;                     // new maps after a loss
+  int relocalizations = 0;                  // losses recovered in the existing map
 };
 
 struct System::Impl {
@@ -36,7 +38,10 @@ struct System::Impl {
   // The steps of mapFrame (system.cpp).
   void initialize(FrameContext& frame, FrameResult* result);
   void track(FrameContext& frame, FrameResult* result);
-  void lose(const std::string& why, FrameResult* result);
+  void lose(const FrameContext& frame, const std::string& why, bool restart_from_frame, FrameResult* result);
+  void reinitialize(const std::string& why, FrameResult* result);
+  void relocalize(FrameContext& frame, FrameResult* result);
+  bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
   void addTiming(const std::string& stage, double ms);
@@ -49,6 +54,7 @@ struct System::Impl {
   Localizer localizer;
   MapReuse reuse;
   Mapper mapper;
+  Relocalizer relocalizer;
   // shared across frames (mapping thread only)
   map::Map map;
   MotionModel motion;
@@ -56,6 +62,7 @@ struct System::Impl {
   bool initialized_once = false;
   std::size_t mapped_last_frame = 0;  // map points tracked in the last tracked frame (not counting reuse)
   double scene_depth = 1.0;           // median depth of the map seen from the camera, map units
+  int lost_frames = 0;                // frames with features spent relocalizing since the loss
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
   // both threads

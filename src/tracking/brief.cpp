@@ -46,6 +46,17 @@ BriefExtractor::BriefExtractor(int patch_size, std::uint32_t seed) : patch_size_
   }
 }
 
+BriefExtractor BriefExtractor::rotated(int quarter_turns) const {
+  BriefExtractor out = *this;
+  const int q = ((quarter_turns % 4) + 4) % 4;
+  for (auto& p : out.pairs_) {
+    for (int k = 0; k < q; ++k) {
+      p = {-p[1], p[0], -p[3], p[2]};  // (x, y) -> (-y, x): 90 degrees in image coordinates (y down)
+    }
+  }
+  return out;
+}
+
 bool BriefExtractor::describe(const cv::Mat& img, int x, int y, BriefDescriptor* d) const {
   const int r = radius();
   if (x < r || y < r || x >= img.cols - r || y >= img.rows - r) return false;

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "vitamin_e/eval/alignment.h"
 #include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/synth/camera_path.h"
 #include "vitamin_e/synth/renderer.h"
@@ -293,33 +294,81 @@ TEST(Robustness, PureRotationAtStartDoesNotInitialize) {
   expectSaneOutput(run);
 }
 
-TEST(Robustness, BlackoutOfTwoSecondsLosesThenReinitializes) {
-  // Tracking, then 2 s (40 frames) of black (lens cap, tunnel), then the view again
-  // from where the camera went meanwhile: lost, re-initialized, and the trajectory
-  // goes on in the same world frame without NaN or jump.
+namespace {
+// Tracking, then 2 s (40 frames) of black (lens cap, tunnel), then the view
+// again from where the camera went meanwhile.
+constexpr int kBlackBegin = 60, kBlackEnd = 100, kBlackoutRunEnd = 170;
+void runBlackout(SlamRun* run) {
   const World& w = world();
-  SlamRun run;
-  const int black_begin = 60, black_end = 100, end = 170;
   const cv::Mat black(kHeight, kWidth, CV_8UC1, cv::Scalar(0));
-  for (int i = 0; i < end; ++i) run.feed(i >= black_begin && i < black_end ? black : w.frame(i), frameTime(i));
-  const int first = run.firstValid();
-  ASSERT_GE(first, 0) << describe(run);
-  ASSERT_LT(first, black_begin) << describe(run);
-  EXPECT_EQ(run.results[black_begin - 1].state, TrackingState::kTracking) << run.results[black_begin - 1].message;
-  EXPECT_EQ(run.results[black_begin].state, TrackingState::kLost) << run.results[black_begin].message;
-  EXPECT_NE(run.results[black_begin].message.find("lost"), std::string::npos);
-  for (int i = black_begin; i < black_end; ++i) EXPECT_FALSE(run.results[i].pose_valid) << "frame " << i;
-  const int again = run.firstValid(black_end);
-  ASSERT_GE(again, 0) << "never re-initialized after the blackout: " << describe(run);
-  EXPECT_LT(again, black_end + 50) << describe(run);
-  EXPECT_GE(run.system.initRetries(), 1);
-  EXPECT_EQ(run.results.back().init_retries, run.system.initRetries());
-  for (int i = again; i < end; ++i) EXPECT_TRUE(run.results[i].pose_valid) << "frame " << i << ": " << run.results[i].message;
+  for (int i = 0; i < kBlackoutRunEnd; ++i) {
+    run->feed(i >= kBlackBegin && i < kBlackEnd ? black : w.frame(i), frameTime(i));
+  }
+  const int first = run->firstValid();
+  ASSERT_GE(first, 0) << describe(*run);
+  ASSERT_LT(first, kBlackBegin) << describe(*run);
+  EXPECT_EQ(run->results[kBlackBegin - 1].state, TrackingState::kTracking) << run->results[kBlackBegin - 1].message;
+  EXPECT_EQ(run->results[kBlackBegin].state, TrackingState::kLost) << run->results[kBlackBegin].message;
+  EXPECT_NE(run->results[kBlackBegin].message.find("lost"), std::string::npos);
+  for (int i = kBlackBegin; i < kBlackEnd; ++i) EXPECT_FALSE(run->results[i].pose_valid) << "frame " << i;
   // The trajectory holds poses on both sides of the blackout.
-  const auto& traj = run.system.trajectory();
+  const auto& traj = run->system.trajectory();
   ASSERT_FALSE(traj.empty());
-  EXPECT_LT(traj.front().timestamp, frameTime(black_begin));
-  EXPECT_GT(traj.back().timestamp, frameTime(black_end));
+  EXPECT_LT(traj.front().timestamp, frameTime(kBlackBegin));
+  EXPECT_GT(traj.back().timestamp, frameTime(kBlackEnd));
+}
+
+// Sim(3)-aligned ATE RMSE [m] of the whole trajectory against the path: one
+// similarity for all of it, so a change of scale or frame at a loss shows.
+double wholeTrajectoryAte(const System& system) {
+  const auto& traj = system.trajectory();
+  Eigen::Matrix3Xd est(3, traj.size()), gt(3, traj.size());
+  for (std::size_t k = 0; k < traj.size(); ++k) {
+    est.col(k) = traj[k].T_w_c.translation();
+    gt.col(k) = world().path->T_w_c(traj[k].timestamp - frameTime(0)).translation();
+  }
+  const ve::eval::Sim3 s = ve::eval::umeyamaAlignment(est, gt, true);
+  double sum = 0.0;
+  for (std::size_t k = 0; k < traj.size(); ++k) sum += (s.apply(Eigen::Vector3d(est.col(k))) - gt.col(k)).squaredNorm();
+  return std::sqrt(sum / static_cast<double>(traj.size()));
+}
+}  // namespace
+
+TEST(Robustness, BlackoutOfTwoSecondsRelocalizesInTheSameMap) {
+  // Lost at the first black frame; after it the camera is found again in the
+  // map it left: no new map, the same world frame and scale.
+  SlamRun run;
+  runBlackout(&run);
+  const int again = run.firstValid(kBlackEnd);
+  ASSERT_GE(again, 0) << "never tracked again after the blackout: " << describe(run);
+  EXPECT_LT(again, kBlackEnd + 5) << describe(run);
+  EXPECT_EQ(run.system.initRetries(), 0);
+  EXPECT_GE(run.system.relocalizations(), 1);
+  EXPECT_EQ(run.results.back().relocalizations, run.system.relocalizations());
+  EXPECT_NE(run.results[again].message.find("relocalized"), std::string::npos) << run.results[again].message;
+  for (int i = again; i < kBlackoutRunEnd; ++i) {
+    EXPECT_TRUE(run.results[i].pose_valid) << "frame " << i << ": " << run.results[i].message;
+  }
+  EXPECT_LT(wholeTrajectoryAte(run.system), 0.02);
+  expectSaneOutput(run, 0.3);
+}
+
+TEST(Robustness, BlackoutWithoutRelocalizationReinitializes) {
+  // relocalization.enabled false: the old behaviour, a new map placed at the
+  // last pose and scale; the trajectory goes on without NaN or jump.
+  SystemConfig config = lowResConfig();
+  config.relocalization.enabled = false;
+  SlamRun run(config);
+  runBlackout(&run);
+  const int again = run.firstValid(kBlackEnd);
+  ASSERT_GE(again, 0) << "never re-initialized after the blackout: " << describe(run);
+  EXPECT_LT(again, kBlackEnd + 50) << describe(run);
+  EXPECT_GE(run.system.initRetries(), 1);
+  EXPECT_EQ(run.system.relocalizations(), 0);
+  EXPECT_EQ(run.results.back().init_retries, run.system.initRetries());
+  for (int i = again; i < kBlackoutRunEnd; ++i) {
+    EXPECT_TRUE(run.results[i].pose_valid) << "frame " << i << ": " << run.results[i].message;
+  }
   expectSaneOutput(run);
 }
 

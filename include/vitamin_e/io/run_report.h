@@ -16,7 +16,8 @@ struct RunStats {
   std::size_t frames = 0;        // frames given to the system
   std::size_t tracked_frames = 0;
   std::size_t skipped_frames = 0;  // unreadable images (warned and skipped)
-  int init_retries = 0;
+  int init_retries = 0;          // re-initializations (new maps) after a loss
+  int relocalizations = 0;       // losses recovered in the existing map
   long long first_init_frame = -1;      // frame at which the first map was built (-1: never)
   std::size_t tracked_since_init = 0;    // tracked frames from that frame on
   std::size_t reused_map_points = 0;     // map points taken over by new tracks (map reuse)

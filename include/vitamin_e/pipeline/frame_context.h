@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "vitamin_e/map/map.h"
 #include "vitamin_e/pipeline/tracked_frame.h"
 
@@ -15,6 +17,7 @@ struct FrameContext {
   double timestamp = 0.0;
   std::string timestamp_text;
   std::vector<FrameTrack> tracks;
+  cv::Mat image;  // the input image (mono8, shared)
   // Per track, its landmark or null. Pointers into the map: call lookup() after
   // every change of the map's landmarks before reading them again.
   std::vector<const map::Landmark*> landmarks;

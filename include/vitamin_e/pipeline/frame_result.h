@@ -12,7 +12,8 @@ namespace vitamin_e::pipeline {
 enum class TrackingState {
   kInitializing,  // waiting for enough parallax to build the first map
   kTracking,      // pose estimated for this frame
-  kLost,          // tracking failed this frame; the system re-initializes
+  kLost,          // tracking failed at this frame; the system relocalizes (or re-initializes)
+  kRelocalizing,  // lost: looking for the camera in the existing map (no pose this frame)
 };
 
 const char* toString(TrackingState state);
@@ -36,7 +37,8 @@ struct FrameResult {
   std::size_t num_tracked = 0;     // 2D tracks alive
   std::size_t num_mapped = 0;      // tracks with a 3D position
   std::size_t map_size = 0;        // points in the map
-  int init_retries = 0;            // re-initializations so far
+  int init_retries = 0;            // re-initializations so far (each one a new map)
+  int relocalizations = 0;         // losses recovered in the existing map so far
   std::map<std::string, double> timing_ms;  // this frame's per-stage times
   std::string message;             // a human-readable note (why lost, why waiting)
 };

@@ -22,7 +22,10 @@ class MapReuse {
   // Hands map points to the frame's unmapped tracks, at pose T_w_c (localized).
   // scene_depth: the map's median depth here (a floor on the depths considered).
   // Returns how many were taken over; the frame's landmarks must be looked up again.
-  int associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth, map::Map* map);
+  // Dormant points are checked in round-robin slices (pipeline.reuse_dormant_per_frame),
+  // or all of them with all_dormant (a relocalized frame, whose tracks are all new).
+  int associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth, map::Map* map,
+                bool all_dormant = false);
   std::uint64_t totalReused() const { return total_reused_; }
 
  private:

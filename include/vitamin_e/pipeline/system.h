@@ -66,7 +66,10 @@ class System {
   // Frames with a pose from that frame on (the reference and in-between frames
   // localized at the initialization are not counted).
   std::size_t framesTrackedSinceInit() const;
+  // Re-initializations after a loss (each a new map, placed at the last pose and scale).
   int initRetries() const;
+  // Losses recovered by relocalizing in the existing map (same world frame and scale).
+  int relocalizations() const;
   // Map points taken over by new tracks (map reuse, see SystemConfig::reuse_radius_px).
   std::size_t reusedMapPoints() const;
   // Retired map points kept for reuse (bounded by map.max_dormant_landmarks).

@@ -2,6 +2,7 @@
 // The hand-over between the two stages of the SLAM system: what the tracking
 // stage (dense tracker + undistortion) produces for the mapping stage.
 #include <Eigen/Core>
+#include <opencv2/core.hpp>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -23,6 +24,7 @@ struct TrackedFrame {
   double timestamp = 0.0;
   std::string timestamp_text;
   std::vector<FrameTrack> tracks;
+  cv::Mat image;  // the input image (shared, not copied): the relocalizer describes keyframes and lost frames
   double tracking_ms = 0.0;
   bool skipped = false;  // stamp did not increase: nothing tracked
   std::string message;

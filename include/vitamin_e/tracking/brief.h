@@ -33,6 +33,10 @@ class BriefExtractor {
   // Describes the patch centred at integer (x, y) of a smoothed CV_32FC1 or
   // CV_8UC1 image. False if the patch leaves the image.
   bool describe(const cv::Mat& smoothed, int x, int y, BriefDescriptor* d) const;
+  // The same tests turned quarter_turns times by (x, y) -> (-y, x) about the
+  // patch centre (exact: integer offsets). Describing an image turned the same
+  // way gives the descriptors of the original (2: an upside-down camera).
+  BriefExtractor rotated(int quarter_turns) const;
 
  private:
   int patch_size_;
