@@ -207,18 +207,6 @@ void System::Impl::reinitialize(const std::string& why, FrameResult* result) {
 void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
   const auto t0 = std::chrono::steady_clock::now();
   result->state = TrackingState::kRelocalizing;
-  // A short loss (a blurred frame): the tracks that still see map points may give the pose again.
-  frame.lookup(map);
-  if (static_cast<int>(frame.numMapped()) >= config.min_pose_inliers) {
-    const PoseEstimate pose = localizer.estimate(frame, motion.predict());
-    if (pose.ok && resume(frame, pose.T_w_c, result)) {
-      ++counters.relocalizations;
-      result->message = "relocalized from the tracked map points (" + std::to_string(pose.num_inliers) + " of " +
-                        std::to_string(pose.num_points) + ")";
-      addTiming("relocalize", elapsedMs(t0));
-      return;
-    }
-  }
   const Relocalization r = relocalizer.relocalize(frame.image, frame, map);
   if (r.ok && resume(frame, r.T_w_c, result)) {
     ++counters.relocalizations;
