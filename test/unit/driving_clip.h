@@ -1,10 +1,10 @@
 #pragma once
 // Short driving clips for the system tests: the project's street scene
 // (src/synth/street.cpp) driven along a named path (drive_path.h), rendered in
-// memory with KITTI's camera scaled to a reduced size (613x185 by default, half
-// of 1226x370: a clip renders and runs in seconds), and the SLAM system run
-// over it with config/kitti.yaml adapted to that size. Deterministic: fixed
-// scene seed and per-frame noise seeds.
+// memory with KITTI's camera, by default scaled to 613x185 (half of 1226x370:
+// a clip renders and runs in seconds), and the SLAM system run over it with
+// config/kitti.yaml adapted to that size. Deterministic: fixed scene seed and
+// per-frame noise seeds.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -31,33 +31,44 @@ struct DrivingClip {
   double path_length_m = 0.0;     // driven over the clip
 };
 
-// Frames 0 .. frames-1 (0: the whole path) of the named path at width x height,
-// 10 Hz, sensor noise sigma 1 grey level, timestamps from t0 [s].
-inline DrivingClip renderDrivingClip(const std::string& path_name, int width = 613, int height = 185, int frames = 0,
-                                     std::uint64_t seed = 0, double t0 = 100.0) {
+// Which part of which path, at which size.
+struct ClipSpec {
+  std::string path = "turn";  // a drive path name (synth::drivePathNames)
+  int width = 613;            // KITTI's camera scaled to width x height
+  int height = 185;
+  int first = 0;              // first frame of the path (10 Hz)
+  int frames = 0;             // 0: to the end of the path
+  std::uint64_t seed = 0;     // town and noise
+  double t0 = 100.0;          // timestamp of the clip's first image [s]
+};
+
+// The frames of a clip, with sensor noise sigma 1 grey level (seeded per frame
+// of the path, so a sub-clip has the same images as the whole path).
+inline DrivingClip renderDrivingClip(const ClipSpec& spec) {
   synth::SequenceConfig seq = synth::defaultSequenceConfig("street");
-  seq.path = path_name;
-  seq.width = width;
-  seq.height = height;
-  seq.seed = seed;
-  seq.frames = frames;
-  const synth::DrivePath path(synth::makeDrivePathConfig(path_name));
+  seq.path = spec.path;
+  seq.width = spec.width;
+  seq.height = spec.height;
+  seq.seed = spec.seed;
+  const synth::DrivePath path(synth::makeDrivePathConfig(spec.path));
   DrivingClip clip;
-  clip.path_name = path_name;
+  clip.path_name = spec.path;
   clip.camera = synth::sequenceCamera(seq);
   clip.rate_hz = seq.rate_hz;
-  const int n = synth::streetSequenceFrames(seq, path);
+  const int whole = synth::streetSequenceFrames(seq, path);
+  const int end = spec.frames > 0 ? std::min(whole, spec.first + spec.frames) : whole;
   const synth::Scene scene = synth::makeStreetSequenceScene(seq, path, clip.camera);
   const synth::Renderer renderer(scene, clip.camera);
-  for (int i = 0; i < n; ++i) {
+  for (int i = spec.first; i < end; ++i) {
     const double t = i / seq.rate_hz;
     synth::RenderOptions options;
     options.noise_sigma = 1.0;
-    options.noise_seed = synth::mixSeed(seed, 0xD81E, static_cast<std::uint64_t>(i));
+    options.noise_seed = synth::mixSeed(spec.seed, 0xD81E, static_cast<std::uint64_t>(i));
     clip.images.push_back(renderer.render(path.T_w_c(t), options));
-    clip.ground_truth.push_back({t0 + t, path.T_w_c(t)});
+    clip.ground_truth.push_back({spec.t0 + (i - spec.first) / seq.rate_hz, path.T_w_c(t)});
   }
-  clip.path_length_m = path.arcLength((n - 1) / seq.rate_hz);
+  if (!clip.images.empty())
+    clip.path_length_m = path.arcLength((end - 1) / seq.rate_hz) - path.arcLength(spec.first / seq.rate_hz);
   return clip;
 }
 

@@ -1,18 +1,20 @@
 // Driving-like motion end to end (issue 14, item 4): the SLAM on the project's
-// street scene, driven like KITTI 07 (driving_clip.h, 613x185, 10 Hz), with
-// config/kitti.yaml scaled to that size.
+// street scene driven like KITTI 07 (driving_clip.h, 10 Hz).
 //   turn: 10 m straight slowing from 3 to 2 m/s, a 90-degree left turn at an
 //         intersection at walking speed (up to 3 degrees and 0.2 m per frame),
-//         10 m straight speeding up to 3.5 m/s: 122 frames, 28.4 m.
+//         10 m straight speeding up to 3.5 m/s: 122 frames, 28.4 m, 613x185.
 //   fast: 60 m straight accelerating from 5 to 15 m/s, then 45 m at 15 m/s
-//         (1.5 m per frame): 99 frames, 103.5 m.
-// The bounds are what a correct monocular SLAM reaches on exact, rectified
-// renders (2% of the path), not what the code of the day gives. When these
-// tests were written the system passed them with a wide margin (turn: no
-// re-initialization, ATE 4.8 cm = 0.17% of the path; fast: 18 cm = 0.17%) while it
-// re-initialized 3 times in the 160 frames of the real KITTI 07: the clips do
-// not reproduce that loss (what real driving adds is not in this scene), they
-// guard the driving motion itself.
+//         (1.5 m per frame): 99 frames, 103.5 m, 613x185.
+//   drive, frames 200-259: the end of an 8.5 m/s straight and the braking
+//         before a right turn, past parked cars: 60 frames, 37 m, 1226x370.
+// config/kitti.yaml, scaled to the image size. The bounds are what a correct
+// monocular SLAM reaches on exact, rectified renders (2% of the path), not
+// what the code of the day gives. When these tests were written, turn and fast
+// passed with a wide margin (no re-initialization, ATE 4.8 cm and 18 cm, 0.17%
+// of the path) while the system re-initialized 3 times in the 160 frames of
+// the real KITTI 07: those clips do not reproduce that loss, they guard the
+// driving motion. The drive clip fails (a silent scale jump, no loss): its
+// test is DISABLED_ until the SLAM is fixed.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -28,11 +30,23 @@ namespace {
 // Each clip is rendered and run once per process, when a test first needs it.
 const ve::test::DrivingClip& clip(const std::string& name) {
   if (name == "turn") {
-    static const ve::test::DrivingClip turn = ve::test::renderDrivingClip("turn");
+    static const ve::test::DrivingClip turn = ve::test::renderDrivingClip({"turn"});
     return turn;
   }
-  static const ve::test::DrivingClip fast = ve::test::renderDrivingClip("fast");
-  return fast;
+  if (name == "fast") {
+    static const ve::test::DrivingClip fast = ve::test::renderDrivingClip({"fast"});
+    return fast;
+  }
+  // Full size: frames 200-259 of drive, the end of its 8.5 m/s straight and
+  // the braking towards the right turn, past cars parked 1.5 m away.
+  ve::test::ClipSpec past_cars;
+  past_cars.path = "drive";
+  past_cars.width = 1226;
+  past_cars.height = 370;
+  past_cars.first = 200;
+  past_cars.frames = 60;
+  static const ve::test::DrivingClip drive = ve::test::renderDrivingClip(past_cars);
+  return drive;
 }
 
 const ve::test::DrivingRun& run(const std::string& name) {
@@ -40,8 +54,12 @@ const ve::test::DrivingRun& run(const std::string& name) {
     static const ve::test::DrivingRun turn = ve::test::runDrivingClip(clip("turn"), ve::test::drivingConfig());
     return turn;
   }
-  static const ve::test::DrivingRun fast = ve::test::runDrivingClip(clip("fast"), ve::test::drivingConfig());
-  return fast;
+  if (name == "fast") {
+    static const ve::test::DrivingRun fast = ve::test::runDrivingClip(clip("fast"), ve::test::drivingConfig());
+    return fast;
+  }
+  static const ve::test::DrivingRun drive = ve::test::runDrivingClip(clip("drive"), ve::test::drivingConfig(1.0));
+  return drive;
 }
 
 // Frames from the first map on that have a pose, and how many there are.
@@ -89,6 +107,26 @@ void expectTracksEveryFrameAfterAnEarlyInit(const std::string& name, long long i
   EXPECT_EQ(r.init_retries, 0);
 }
 
+// Sim(3) ATE below 2% of the path, and the scale right all along, not only on
+// average: after the one Sim(3), the distance covered in each third of the
+// matched frames is the true one within 10% (scale drift and jumps show here).
+void expectSmallAteAndSteadyScale(const std::string& name) {
+  report(name);
+  ASSERT_GE(run(name).estimate.size(), 3u) << "no trajectory";
+  const auto e = evaluate(name);
+  EXPECT_LT(e.ate.rmse, 0.02 * clip(name).path_length_m);
+  EXPECT_GE(e.success_rate, 0.75);
+  ASSERT_GE(e.pairs.size(), 9u);
+  const std::size_t n = e.pairs.size();
+  const auto& gt = clip(name).ground_truth;
+  for (int third = 0; third < 3; ++third) {
+    const std::size_t a = third * (n - 1) / 3, b = (third + 1) * (n - 1) / 3;
+    const double est = (e.aligned[e.pairs[b].first].T_w_c.translation() - e.aligned[e.pairs[a].first].T_w_c.translation()).norm();
+    const double truth = (gt[e.pairs[b].second].T_w_c.translation() - gt[e.pairs[a].second].T_w_c.translation()).norm();
+    EXPECT_NEAR(est / truth, 1.0, 0.1) << "third " << third << ": " << est << " m estimated, " << truth << " m true";
+  }
+}
+
 }  // namespace
 
 TEST(SystemDriving, TurnAtWalkingSpeedTracksEveryFrameWithoutReinitializing) {
@@ -111,23 +149,20 @@ TEST(SystemDriving, FastStraightTracksEveryFrameWithoutReinitializing) {
 }
 
 TEST(SystemDriving, FastStraightAteIsSmallAndScaleHoldsAfterSim3Alignment) {
-  report("fast");
-  ASSERT_GE(run("fast").estimate.size(), 3u) << "no trajectory";
-  const auto e = evaluate("fast");
-  EXPECT_LT(e.ate.rmse, 0.02 * clip("fast").path_length_m);  // 2% of 103.5 m: 2.07 m
-  EXPECT_GE(e.success_rate, 0.75);
-  // The scale is right all along, not only on average: after the one Sim(3),
-  // the distance covered in each third of the matched frames is the true one
-  // within 10% (the speed triples over the clip: scale drift shows here).
-  ASSERT_GE(e.pairs.size(), 9u);
-  const std::size_t n = e.pairs.size();
-  for (int third = 0; third < 3; ++third) {
-    const std::size_t a = third * (n - 1) / 3, b = (third + 1) * (n - 1) / 3;
-    const auto& gt = clip("fast").ground_truth;
-    const double est = (e.aligned[e.pairs[b].first].T_w_c.translation() - e.aligned[e.pairs[a].first].T_w_c.translation()).norm();
-    const double truth = (gt[e.pairs[b].second].T_w_c.translation() - gt[e.pairs[a].second].T_w_c.translation()).norm();
-    EXPECT_NEAR(est / truth, 1.0, 0.1) << "third " << third << ": " << est << " m estimated, " << truth << " m true";
-  }
+  // 2% of 103.5 m: 2.07 m; the speed triples over the clip.
+  expectSmallAteAndSteadyScale("fast");
+}
+
+// Fails today: every frame is tracked without re-initializing, but the scale
+// drops to 0.46 of what it was within 3 frames (229-232 of drive, a keyframe
+// that adds about 900 points, braking from 7 m/s past a car parked 1.5 m
+// away): Sim(3) ATE 1.57 m over 37 m (4.2%), the thirds' scale 1.18, 1.0,
+// 0.51. vitamin_e_run on the written render (make_sequence --scene street
+// --path drive, run_dataset.sh --start-frame 200 --max-frames 60) gives the
+// same (1.70 m). The town of seeds 1-3 and the half-size images do not show it.
+TEST(SystemDriving, DISABLED_DriveFastPastParkedCarsKeepsItsScale) {
+  expectTracksEveryFrameAfterAnEarlyInit("drive", 10);
+  expectSmallAteAndSteadyScale("drive");
 }
 
 // The clips themselves (always on): the motion is what the tests above claim.
