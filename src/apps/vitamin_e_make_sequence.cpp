@@ -1,9 +1,10 @@
 // vitamin_e_make_sequence: renders the project's own synthetic monocular sequence
-// (textured room with boxes, figure-eight camera path, lens distortion, exact
-// ground truth) into an EuRoC ASL folder.
-//   vitamin_e_make_sequence --out DIR [--frames N] [--rate-hz 20] [--width 752 --height 480]
-//       [--seed S] [--speed M_PER_S] [--noise SIGMA] [--distortion euroc|none]
-//       [--supersample S] [--texel M] [--boxes N]
+// into an EuRoC ASL folder with exact ground truth: the textured room with boxes
+// (figure-eight camera path, lens distortion) or a street (a town driven along
+// a named path with KITTI's camera).
+//   vitamin_e_make_sequence --out DIR [--scene room|street] [--path turn|fast|drive]
+//       [--frames N] [--rate-hz HZ] [--width W --height H] [--seed S] [--speed M_PER_S]
+//       [--noise SIGMA] [--distortion euroc|none] [--supersample S] [--texel M] [--boxes N]
 // Bad arguments: one "error: ..." line, exit 2.
 #include <cstdio>
 #include <cstdlib>
@@ -17,20 +18,26 @@
 namespace {
 
 const char* kUsage =
-    "usage: vitamin_e_make_sequence --out DIR [--frames N] [--rate-hz HZ] [--width W --height H]\n"
-    "           [--seed S] [--speed M_PER_S] [--noise SIGMA] [--distortion euroc|none]\n"
-    "           [--supersample S] [--texel M] [--boxes N]\n"
+    "usage: vitamin_e_make_sequence --out DIR [--scene room|street] [--path turn|fast|drive]\n"
+    "           [--frames N] [--rate-hz HZ] [--width W --height H] [--seed S] [--speed M_PER_S]\n"
+    "           [--noise SIGMA] [--distortion euroc|none] [--supersample S] [--texel M] [--boxes N]\n"
     "  --out DIR          output folder (EuRoC ASL layout + groundtruth_cam0_tum.txt + scene.json)\n"
-    "  --frames N         number of images (default 400)\n"
-    "  --rate-hz HZ       frame rate (default 20)\n"
-    "  --width/--height   image size (default 752 x 480; EuRoC intrinsics are scaled)\n"
+    "  --scene S          room (default): a textured room with boxes, figure-eight path, EuRoC camera;\n"
+    "                     street: a town with facades, road, parked cars and a flat sky, driven along\n"
+    "                     --path with KITTI's camera (1226 x 370, fx 707.09, no distortion, 10 Hz,\n"
+    "                     1.65 m above the road); run it with --config config/kitti.yaml\n"
+    "  --path P           street only: turn (slow straight, 90-degree left turn at walking speed, up to\n"
+    "                     3 deg/frame), fast (straight, 5 -> 15 m/s) or drive (default: both, KITTI 07-like)\n"
+    "  --frames N         number of images (room: default 400; street: default and at most the whole path)\n"
+    "  --rate-hz HZ       frame rate (default 20; street 10)\n"
+    "  --width/--height   image size (default 752 x 480, street 1226 x 370; intrinsics are scaled)\n"
     "  --seed S           scene, texture and noise seed (default 0)\n"
-    "  --speed V          mean camera speed in m/s (default 0.4)\n"
+    "  --speed V          room only: mean camera speed in m/s (default 0.4)\n"
     "  --noise SIGMA      Gaussian image noise in grey levels (default 1.0)\n"
-    "  --distortion D     euroc (radial-tangential of EuRoC cam0, default) or none\n"
+    "  --distortion D     room only: euroc (radial-tangential of EuRoC cam0, default) or none\n"
     "  --supersample S    S x S rays per pixel, 1..4 (default 1; mip filtering is always on)\n"
-    "  --texel M          texture resolution in metres (default 0.005)\n"
-    "  --boxes N          number of boxes in the room (default 6)\n";
+    "  --texel M          finest texture resolution in metres (default 0.005, street 0.02)\n"
+    "  --boxes N          room only: number of boxes in the room (default 6)\n";
 
 using vitamin_e::cli::fail;
 const auto number = vitamin_e::cli::parseDouble;
@@ -44,7 +51,25 @@ int integer(const std::string& key, const std::string& v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  vitamin_e::synth::SequenceConfig cfg;
+  // The scene first: its defaults are the starting point of every other option.
+  std::string scene = "room";
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      return 0;
+    }
+    if (a == "--scene") {
+      if (i + 1 >= argc) fail("--scene needs a value");
+      scene = argv[++i];
+      if (scene != "room" && scene != "street") fail("--scene must be room or street, got '" + scene + "'");
+    }
+  }
+  vitamin_e::synth::SequenceConfig cfg = vitamin_e::synth::defaultSequenceConfig(scene);
+  const bool street = scene == "street";
+  auto roomOnly = [&](const std::string& key) {
+    if (street) fail(key + " applies to the room scene only");
+  };
   std::string out;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -57,6 +82,12 @@ int main(int argc, char** argv) {
       return 0;
     } else if (a == "--out") {
       out = next();
+    } else if (a == "--scene") {
+      next();  // read above
+    } else if (a == "--path") {
+      const std::string p = next();
+      if (!street) fail("--path applies to --scene street only");
+      cfg.path = p;
     } else if (a == "--frames") {
       cfg.frames = integer(a, next());
     } else if (a == "--rate-hz") {
@@ -70,11 +101,13 @@ int main(int argc, char** argv) {
       if (s < 0) fail("--seed must be >= 0");
       cfg.seed = static_cast<std::uint64_t>(s);
     } else if (a == "--speed") {
+      roomOnly(a);
       cfg.speed = number(a, next());
     } else if (a == "--noise") {
       cfg.noise_sigma = number(a, next());
     } else if (a == "--distortion") {
       const std::string d = next();
+      if (d == "euroc") roomOnly("--distortion euroc");
       if (d == "euroc") {
         cfg.distortion = true;
       } else if (d == "none") {
@@ -87,6 +120,7 @@ int main(int argc, char** argv) {
     } else if (a == "--texel") {
       cfg.texel_m = number(a, next());
     } else if (a == "--boxes") {
+      roomOnly(a);
       cfg.num_boxes = integer(a, next());
     } else {
       fail("unknown argument '" + a + "' (see --help)");
@@ -99,13 +133,19 @@ int main(int argc, char** argv) {
     fail(e.what());
   }
   try {
-    const int step = std::max(1, cfg.frames / 10);
     const auto stats = vitamin_e::synth::writeSequence(out, cfg, [&](int done, int total) {
+      const int step = std::max(1, total / 10);
       if (done % step == 0 || done == total) std::fprintf(stderr, "  %d/%d frames\n", done, total);
     });
-    std::printf("wrote %d frames (%dx%d, %.1f Hz, seed %llu, %s distortion) to %s\n", stats.frames, cfg.width,
-                cfg.height, cfg.rate_hz, static_cast<unsigned long long>(cfg.seed), cfg.distortion ? "euroc" : "no",
-                out.c_str());
+    if (street) {
+      std::printf("wrote %d frames (street, path %s, %dx%d, %.1f Hz, seed %llu) to %s\n", stats.frames,
+                  cfg.path.c_str(), cfg.width, cfg.height, cfg.rate_hz, static_cast<unsigned long long>(cfg.seed),
+                  out.c_str());
+    } else {
+      std::printf("wrote %d frames (%dx%d, %.1f Hz, seed %llu, %s distortion) to %s\n", stats.frames, cfg.width,
+                  cfg.height, cfg.rate_hz, static_cast<unsigned long long>(cfg.seed), cfg.distortion ? "euroc" : "no",
+                  out.c_str());
+    }
     std::printf("scene %.2f s; per frame: render %.1f ms, png %.1f ms\n", stats.scene_build_s, stats.render_ms_mean,
                 stats.write_ms_mean);
   } catch (const std::exception& e) {

@@ -5,18 +5,28 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "vitamin_e/synth/renderer.h"
+#include "vitamin_e/synth/street.h"
 
 namespace vitamin_e::synth {
 namespace fs = std::filesystem;
 
 void SequenceConfig::validate() const {
-  if (frames < 1) throw std::invalid_argument("frames must be >= 1");
+  if (scene != "room" && scene != "street") throw std::invalid_argument("scene must be room or street, got '" + scene + "'");
+  if (scene == "street") {
+    if (frames < 0) throw std::invalid_argument("frames must be >= 0 (0: the whole path)");
+    if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("rate_hz must be in (0, 1000]");
+    streetSequenceFrames(*this, DrivePath(makeDrivePathConfig(path)));  // unknown path, too many frames
+    if (distortion) throw std::invalid_argument("distortion: the street scene's (KITTI) camera has none");
+  } else if (frames < 1) {
+    throw std::invalid_argument("frames must be >= 1");
+  }
   if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("rate_hz must be in (0, 1000]");
   if (width < 16 || height < 16 || width > 8192 || height > 8192)
     throw std::invalid_argument("width/height must be in [16, 8192]");
@@ -38,6 +48,50 @@ camera::Camera makeSequenceCamera(int width, int height, bool distortion) {
   }
   return camera::Camera(width, height, 458.654 * sx, 457.296 * sy, (367.215 + 0.5) * sx - 0.5,
                         (248.375 + 0.5) * sy - 0.5, model, d);
+}
+
+SequenceConfig defaultSequenceConfig(const std::string& scene) {
+  SequenceConfig c;
+  if (scene == "room") return c;
+  if (scene != "street") throw std::invalid_argument("scene must be room or street, got '" + scene + "'");
+  c.scene = "street";
+  c.path = "drive";
+  c.frames = 0;
+  c.rate_hz = 10.0;
+  c.width = 1226;
+  c.height = 370;
+  c.distortion = false;
+  c.texel_m = 0.02;
+  return c;
+}
+
+camera::Camera makeKittiCamera(int width, int height) {
+  const double sx = width / 1226.0, sy = height / 370.0;
+  return camera::Camera(width, height, 707.0912 * sx, 707.0912 * sy, (601.8873 + 0.5) * sx - 0.5,
+                        (183.1104 + 0.5) * sy - 0.5);
+}
+
+camera::Camera sequenceCamera(const SequenceConfig& config) {
+  return config.scene == "street" ? makeKittiCamera(config.width, config.height)
+                                  : makeSequenceCamera(config.width, config.height, config.distortion);
+}
+
+Scene makeStreetSequenceScene(const SequenceConfig& config, const DrivePath& path, const camera::Camera& camera) {
+  StreetConfig sc;
+  sc.seed = config.seed;
+  sc.texel_m = config.texel_m;
+  // About 0.85 texel per pixel on a surface facing the camera at the face's nearest.
+  sc.texel_per_m = 0.85 / camera.fx();
+  sc.max_texel_m = std::max(sc.texel_m, 0.2);
+  return makeStreetScene(sc, path);
+}
+
+int streetSequenceFrames(const SequenceConfig& config, const DrivePath& path) {
+  const int whole = static_cast<int>(std::floor(path.duration() * config.rate_hz + 1e-9)) + 1;
+  if (config.frames > whole)
+    throw std::invalid_argument("frames: path '" + config.path + "' lasts " + std::to_string(path.duration()) +
+                                " s: at most " + std::to_string(whole) + " frames at " + std::to_string(config.rate_hz) + " Hz");
+  return config.frames > 0 ? config.frames : whole;
 }
 
 CameraPathConfig makeSequencePath(const SequenceConfig& config) {
@@ -110,9 +164,23 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
   if (!fs::is_directory(img_dir)) throw std::runtime_error(img_dir.string() + ": cannot create folder");
 
   const auto t_scene = Clock::now();
-  const camera::Camera cam = makeSequenceCamera(config.width, config.height, config.distortion);
-  const CameraPath path(makeSequencePath(config));
-  const Scene scene = makeSequenceScene(config, path);
+  const camera::Camera cam = sequenceCamera(config);
+  const bool street = config.scene == "street";
+  // One of the two: the room's figure-eight or the street's drive.
+  std::unique_ptr<CameraPath> room_path;
+  std::unique_ptr<DrivePath> drive_path;
+  std::unique_ptr<Scene> scene_ptr;
+  int frames = config.frames;
+  if (street) {
+    drive_path = std::make_unique<DrivePath>(makeDrivePathConfig(config.path));
+    frames = streetSequenceFrames(config, *drive_path);
+    scene_ptr = std::make_unique<Scene>(makeStreetSequenceScene(config, *drive_path, cam));
+  } else {
+    room_path = std::make_unique<CameraPath>(makeSequencePath(config));
+    scene_ptr = std::make_unique<Scene>(makeSequenceScene(config, *room_path));
+  }
+  const Scene& scene = *scene_ptr;
+  auto pose = [&](double t) { return street ? drive_path->T_w_c(t) : room_path->T_w_c(t); };
   const Renderer renderer(scene, cam, config.supersample);
   stats.scene_build_s = std::chrono::duration<double>(Clock::now() - t_scene).count();
 
@@ -126,9 +194,9 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
 
   double render_ms = 0.0, write_ms = 0.0;
   char line[256];
-  for (int i = 0; i < config.frames; ++i) {
+  for (int i = 0; i < frames; ++i) {
     const std::int64_t ns = frameTimestampNs(config, i);
-    const Eigen::Isometry3d T_w_c = path.T_w_c(i / config.rate_hz);
+    const Eigen::Isometry3d T_w_c = pose(i / config.rate_hz);
     RenderOptions ro;
     ro.noise_sigma = config.noise_sigma;
     ro.noise_seed = mixSeed(config.seed, 0x401CE, static_cast<std::uint64_t>(i));
@@ -150,24 +218,32 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
     std::snprintf(line, sizeof(line), "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n", static_cast<long long>(ns), p.x(),
                   p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
     body << line;
-    if (progress) progress(i + 1, config.frames);
+    if (progress) progress(i + 1, frames);
   }
   if (!csv || !tum || !body) throw std::runtime_error(out_dir + ": write failed");
 
-  const CameraPathConfig& pc = path.config();
   std::ostringstream js;
   js.precision(12);
-  js << "{\"generator\": \"vitamin_e_make_sequence\", \"n_frames\": " << config.frames
+  js << "{\"generator\": \"vitamin_e_make_sequence\", ";
+  if (street) js << "\"scene\": \"street\", ";
+  js << "\"n_frames\": " << frames
      << ", \"rate_hz\": " << config.rate_hz << ", \"first_frame_ns\": " << frameTimestampNs(config, 0)
-     << ", \"last_frame_ns\": " << frameTimestampNs(config, config.frames - 1) << ",\n \"camera\": {\"width\": "
+     << ", \"last_frame_ns\": " << frameTimestampNs(config, frames - 1) << ",\n \"camera\": {\"width\": "
      << cam.width() << ", \"height\": " << cam.height() << ", \"K\": [" << cam.fx() << ", " << cam.fy() << ", "
      << cam.cx() << ", " << cam.cy() << "], \"distortion_model\": \"" << camera::toString(cam.model())
      << "\", \"distortion\": [";
   for (std::size_t k = 0; k < cam.distortion().size(); ++k) js << (k ? ", " : "") << cam.distortion()[k];
-  js << "], \"T_B_C\": \"identity\"},\n \"path\": {\"kind\": \"figure-eight\", \"center\": [" << pc.center.x() << ", "
-     << pc.center.y() << ", " << pc.center.z() << "], \"radius_x\": " << pc.radius_x << ", \"radius_y\": "
-     << pc.radius_y << ", \"height_amp\": " << pc.height_amp << ", \"speed_m_s\": " << pc.speed
-     << ", \"heading0\": " << pc.heading0 << ", \"heading_rate\": " << pc.heading_rate << "},\n \"render\": {\"supersample\": "
+  js << "], \"T_B_C\": \"identity\"},\n \"path\": ";
+  if (street) {
+    js << drive_path->toJson();
+  } else {
+    const CameraPathConfig& pc = room_path->config();
+    js << "{\"kind\": \"figure-eight\", \"center\": [" << pc.center.x() << ", "
+       << pc.center.y() << ", " << pc.center.z() << "], \"radius_x\": " << pc.radius_x << ", \"radius_y\": "
+       << pc.radius_y << ", \"height_amp\": " << pc.height_amp << ", \"speed_m_s\": " << pc.speed
+       << ", \"heading0\": " << pc.heading0 << ", \"heading_rate\": " << pc.heading_rate << "}";
+  }
+  js << ",\n \"render\": {\"supersample\": "
      << config.supersample << ", \"mip_filtering\": true, \"noise_sigma\": " << config.noise_sigma
      << "},\n";
   // The scene's fields (seed, room, boxes, faces) at the top level, as in the shared renderer's scene.json.
@@ -175,9 +251,9 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
   js << " " << scene_json.substr(1, scene_json.size() - 2) << "}\n";
   openOut(out / "scene.json") << js.str();
 
-  stats.frames = config.frames;
-  stats.render_ms_mean = render_ms / config.frames;
-  stats.write_ms_mean = write_ms / config.frames;
+  stats.frames = frames;
+  stats.render_ms_mean = render_ms / frames;
+  stats.write_ms_mean = write_ms / frames;
   return stats;
 }
 

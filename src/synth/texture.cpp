@@ -6,6 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "texture_noise.h"
+
 namespace vitamin_e::synth {
 
 std::uint64_t Rng::next() {
@@ -30,7 +32,7 @@ std::uint64_t mixSeed(std::uint64_t a, std::uint64_t b, std::uint64_t c) {
   return r.next();
 }
 
-namespace {
+namespace detail {
 
 // One octave of value noise with the given wavelength [texels]: random values on
 // a lattice, bicubic interpolation, random sub-lattice offset. Added into dst.
@@ -88,7 +90,7 @@ void addShapes(cv::Mat* dst, double texel_m, double min_m, double max_m, double 
   }
 }
 
-}  // namespace
+}  // namespace detail
 
 cv::Mat generateProceduralTexture(int width, int height, double texel_m, std::uint64_t seed) {
   CV_Assert(width > 0 && height > 0 && texel_m > 0.0);
@@ -99,10 +101,10 @@ cv::Mat generateProceduralTexture(int width, int height, double texel_m, std::ui
   for (double lambda_m = 1.3; lambda_m >= 0.015; lambda_m /= 1.83) {
     const double px = lambda_m / texel_m;
     if (px < 2.0) break;
-    addValueNoise(&tex, px, 0.22 * std::pow(lambda_m / 1.3, 0.45), &rng);
+    detail::addValueNoise(&tex, px, 0.22 * std::pow(lambda_m / 1.3, 0.45), &rng);
   }
   // Shapes with hard edges: corners, blobs and strokes from 1.5 cm to 40 cm.
-  addShapes(&tex, texel_m, 0.015, 0.4, 60.0, 0.35, &rng);
+  detail::addShapes(&tex, texel_m, 0.015, 0.4, 60.0, 0.35, &rng);
   // Soften aliasing of the rasterized edges a little.
   cv::GaussianBlur(tex, tex, cv::Size(3, 3), 0.6);
   // Normalize to mean 0.5, std 0.17; a soft clip keeps the extremes.

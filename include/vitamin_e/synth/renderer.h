@@ -3,6 +3,8 @@
 // (sub)pixel through Camera::unproject, precomputed once; anti-aliased by mip
 // filtering (per-pixel footprint from distance, incidence and the pixel's
 // angular size) and optional s x s supersampling; optional Gaussian noise.
+// Rays that hit nothing (open scenes) take the scene's flat sky intensity.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -40,7 +42,10 @@ class Renderer {
   int ss_ = 1;
   std::vector<Eigen::Vector3f> rays_c_;   // per subsample, row-major pixels then s*s samples; unit bearings
   std::vector<float> pixel_angle_;        // per pixel: angular size [rad] (of one subsample)
-  double min_ray_cos_ = 1.0;              // widest ray's angle to the optical axis (cosine)
+  static constexpr int kTile = 16;        // pixels are rendered in kTile x kTile tiles
+  int tiles_x_ = 0;
+  // Per tile (row-major): inward normals (camera frame) of a pyramid holding all its rays.
+  std::vector<std::array<Eigen::Vector3d, 4>> tile_normals_c_;
 };
 
 }  // namespace vitamin_e::synth

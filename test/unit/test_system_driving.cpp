@@ -1,0 +1,196 @@
+// Driving-like motion end to end (issue 14, item 4): the SLAM on the project's
+// street scene driven like KITTI 07 (driving_clip.h, 10 Hz).
+//   turn: 10 m straight slowing from 3 to 2 m/s, a 90-degree left turn at an
+//         intersection at walking speed (up to 3 degrees and 0.2 m per frame),
+//         10 m straight speeding up to 3.5 m/s: 122 frames, 28.4 m, 613x185.
+//   fast: 60 m straight accelerating from 5 to 15 m/s, then 45 m at 15 m/s
+//         (1.5 m per frame): 99 frames, 103.5 m, 613x185.
+//   drive, frames 200-259: the end of an 8.5 m/s straight and the braking
+//         before a right turn, past parked cars: 60 frames, 37 m, 1226x370.
+// config/kitti.yaml, scaled to the image size. The bounds are what a correct
+// monocular SLAM reaches on exact, rectified renders (2% of the path), not
+// what the code of the day gives. When these tests were written, turn and fast
+// passed with a wide margin (no re-initialization, ATE 4.8 cm and 18 cm, 0.17%
+// of the path) while the system re-initialized 3 times in the 160 frames of
+// the real KITTI 07: those clips do not reproduce that loss, they guard the
+// driving motion. The drive clip fails (a silent scale jump, no loss): its
+// test is DISABLED_ until the SLAM is fixed.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <vector>
+
+#include "driving_clip.h"
+
+namespace ve = vitamin_e;
+using ve::pipeline::TrackingState;
+
+namespace {
+
+// Each clip is rendered and run once per process, when a test first needs it.
+const ve::test::DrivingClip& clip(const std::string& name) {
+  if (name == "turn") {
+    static const ve::test::DrivingClip turn = ve::test::renderDrivingClip({"turn"});
+    return turn;
+  }
+  if (name == "fast") {
+    static const ve::test::DrivingClip fast = ve::test::renderDrivingClip({"fast"});
+    return fast;
+  }
+  // Full size: frames 200-259 of drive, the end of its 8.5 m/s straight and
+  // the braking towards the right turn, past cars parked 1.5 m away.
+  ve::test::ClipSpec past_cars;
+  past_cars.path = "drive";
+  past_cars.width = 1226;
+  past_cars.height = 370;
+  past_cars.first = 200;
+  past_cars.frames = 60;
+  static const ve::test::DrivingClip drive = ve::test::renderDrivingClip(past_cars);
+  return drive;
+}
+
+const ve::test::DrivingRun& run(const std::string& name) {
+  if (name == "turn") {
+    static const ve::test::DrivingRun turn = ve::test::runDrivingClip(clip("turn"), ve::test::drivingConfig());
+    return turn;
+  }
+  if (name == "fast") {
+    static const ve::test::DrivingRun fast = ve::test::runDrivingClip(clip("fast"), ve::test::drivingConfig());
+    return fast;
+  }
+  static const ve::test::DrivingRun drive = ve::test::runDrivingClip(clip("drive"), ve::test::drivingConfig(1.0));
+  return drive;
+}
+
+// Frames from the first map on that have a pose, and how many there are.
+std::pair<int, int> trackedAfterInit(const ve::test::DrivingRun& r) {
+  if (r.first_init_frame < 0) return {0, 0};
+  int tracked = 0, total = 0;
+  for (std::size_t i = static_cast<std::size_t>(r.first_init_frame); i < r.results.size(); ++i, ++total)
+    if (r.results[i].state == TrackingState::kTracking) ++tracked;
+  return {tracked, total};
+}
+
+// Sim(3) ATE over the whole clip (N = every frame for the success rate).
+ve::eval::EvalResult evaluate(const std::string& name) {
+  ve::eval::EvalConfig config;
+  config.frames = clip(name).images.size();
+  return ve::eval::evaluate(run(name).estimate, clip(name).ground_truth, config);
+}
+
+// One line with what the run gave, for the log (and the issue).
+void report(const std::string& name) {
+  const auto& r = run(name);
+  const auto [tracked, total] = trackedAfterInit(r);
+  std::printf("[driving %s] %zu frames, %.1f m: first map at frame %lld, tracked after it %d/%d, re-initializations %d, "
+              "SLAM %.1f s\n",
+              name.c_str(), clip(name).images.size(), clip(name).path_length_m, r.first_init_frame, tracked, total,
+              r.init_retries, r.seconds);
+  if (r.estimate.size() >= 3) {
+    const auto e = evaluate(name);
+    std::printf("[driving %s] Sim(3) ATE rmse %.3f m (%.2f%% of the path), matched %zu/%zu, scale %.3f\n", name.c_str(),
+                e.ate.rmse, 100.0 * e.ate.rmse / clip(name).path_length_m, e.matched, e.frames, e.alignment.scale);
+  }
+}
+
+void expectTracksEveryFrameAfterAnEarlyInit(const std::string& name, long long init_by_frame) {
+  const auto& r = run(name);
+  report(name);
+  ASSERT_GE(r.first_init_frame, 0) << "never initialized";
+  EXPECT_LT(r.first_init_frame, init_by_frame) << "no map in the first " << init_by_frame << " frames";
+  int lost = 0;
+  for (std::size_t i = static_cast<std::size_t>(r.first_init_frame); i < r.results.size(); ++i) {
+    if (r.results[i].state != TrackingState::kTracking && ++lost <= 5)
+      ADD_FAILURE() << "frame " << i << ": " << ve::pipeline::toString(r.results[i].state) << " " << r.results[i].message;
+  }
+  EXPECT_EQ(lost, 0) << "frames without a pose after the first map";
+  EXPECT_EQ(r.init_retries, 0);
+}
+
+// Sim(3) ATE below 2% of the path, and the scale right all along, not only on
+// average: after the one Sim(3), the distance covered in each third of the
+// matched frames is the true one within 10% (scale drift and jumps show here).
+void expectSmallAteAndSteadyScale(const std::string& name) {
+  report(name);
+  ASSERT_GE(run(name).estimate.size(), 3u) << "no trajectory";
+  const auto e = evaluate(name);
+  EXPECT_LT(e.ate.rmse, 0.02 * clip(name).path_length_m);
+  EXPECT_GE(e.success_rate, 0.75);
+  ASSERT_GE(e.pairs.size(), 9u);
+  const std::size_t n = e.pairs.size();
+  const auto& gt = clip(name).ground_truth;
+  for (int third = 0; third < 3; ++third) {
+    const std::size_t a = third * (n - 1) / 3, b = (third + 1) * (n - 1) / 3;
+    const double est = (e.aligned[e.pairs[b].first].T_w_c.translation() - e.aligned[e.pairs[a].first].T_w_c.translation()).norm();
+    const double truth = (gt[e.pairs[b].second].T_w_c.translation() - gt[e.pairs[a].second].T_w_c.translation()).norm();
+    EXPECT_NEAR(est / truth, 1.0, 0.1) << "third " << third << ": " << est << " m estimated, " << truth << " m true";
+  }
+}
+
+}  // namespace
+
+TEST(SystemDriving, TurnAtWalkingSpeedTracksEveryFrameWithoutReinitializing) {
+  // The map must be built on the straight, before the turn starts (frame ~40).
+  expectTracksEveryFrameAfterAnEarlyInit("turn", 30);
+}
+
+TEST(SystemDriving, TurnAtWalkingSpeedAteIsSmallAfterSim3Alignment) {
+  report("turn");
+  ASSERT_GE(run("turn").estimate.size(), 3u) << "no trajectory";
+  const auto e = evaluate("turn");
+  // 2% of 28.4 m: 57 cm.
+  EXPECT_LT(e.ate.rmse, 0.02 * clip("turn").path_length_m);
+  EXPECT_GE(e.success_rate, 0.75);  // the map built within the first 30 frames, then every frame
+}
+
+TEST(SystemDriving, FastStraightTracksEveryFrameWithoutReinitializing) {
+  // At 5-7 m/s, the first 20 frames cover 12 m.
+  expectTracksEveryFrameAfterAnEarlyInit("fast", 20);
+}
+
+TEST(SystemDriving, FastStraightAteIsSmallAndScaleHoldsAfterSim3Alignment) {
+  // 2% of 103.5 m: 2.07 m; the speed triples over the clip.
+  expectSmallAteAndSteadyScale("fast");
+}
+
+// Fails today: every frame is tracked without re-initializing, but the scale
+// drops to 0.46 of what it was within 3 frames (229-232 of drive, a keyframe
+// that adds about 900 points, braking from 7 m/s past a car parked 1.5 m
+// away): Sim(3) ATE 1.57 m over 37 m (4.2%), the thirds' scale 1.18, 1.0,
+// 0.51. vitamin_e_run on the written render (make_sequence --scene street
+// --path drive, run_dataset.sh --start-frame 200 --max-frames 60) gives the
+// same (1.70 m). The town of seeds 1-3 and the half-size images do not show it.
+TEST(SystemDriving, DISABLED_DriveFastPastParkedCarsKeepsItsScale) {
+  expectTracksEveryFrameAfterAnEarlyInit("drive", 10);
+  expectSmallAteAndSteadyScale("drive");
+}
+
+// The clips themselves (always on): the motion is what the tests above claim.
+TEST(SystemDriving, ClipsHaveTheClaimedMotion) {
+  const auto& turn = clip("turn");
+  const auto& fast = clip("fast");
+  ASSERT_EQ(turn.images.size(), 122u);
+  EXPECT_EQ(turn.images.front().cols, 613);
+  EXPECT_EQ(turn.images.front().rows, 185);
+  double max_rot_deg = 0.0, max_step = 0.0, min_step = 1e9;
+  for (std::size_t i = 1; i < turn.ground_truth.size(); ++i) {
+    const Eigen::Isometry3d d = turn.ground_truth[i - 1].T_w_c.inverse() * turn.ground_truth[i].T_w_c;
+    max_rot_deg = std::max(max_rot_deg, Eigen::AngleAxisd(d.rotation()).angle() * 180.0 / M_PI);
+    max_step = std::max(max_step, d.translation().norm());
+    min_step = std::min(min_step, d.translation().norm());
+  }
+  EXPECT_GT(max_rot_deg, 2.8);
+  EXPECT_LT(max_rot_deg, 3.1);
+  EXPECT_GE(min_step, 0.19);
+  EXPECT_LE(max_step, 0.36);
+  double fast_max = 0.0;
+  for (std::size_t i = 1; i < fast.ground_truth.size(); ++i)
+    fast_max = std::max(fast_max, (fast.ground_truth[i].T_w_c.translation() - fast.ground_truth[i - 1].T_w_c.translation()).norm());
+  EXPECT_NEAR(fast_max, 1.5, 0.01);  // 15 m/s at 10 Hz
+  EXPECT_GT(fast.path_length_m, 100.0);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
