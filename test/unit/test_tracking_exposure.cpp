@@ -10,8 +10,6 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <random>
 #include <vector>
@@ -93,12 +91,6 @@ StepResult trackThroughStep(const vt::TrackerConfig& cfg, double g) {
   for (int k = 0; k <= 7; ++k) {
     const cv::Mat img = expose(radiance(blobs, w, h, step * k), k >= 6 ? g : 1.0, 100 + k);
     const vt::TrackerFrame f = tracker.track(img, 0.05 * k);
-    if (std::getenv("VE_TEST_VERBOSE")) {
-      std::printf("k %d points %zu tracked %d new %d scale %.3g ratio %.3f gain %.3f:", k, f.points.size(), f.num_tracked,
-                  f.num_new, f.curvature_scale, f.strength_ratio, f.patch_gain);
-      for (const auto& kv : f.lost_by) std::printf(" %s %d", kv.first.c_str(), kv.second);
-      std::printf("\n");
-    }
     if (k == 5) {
       for (const auto& p : f.points) {
         if (p.age > 0) tracked[p.id] = p.uv;
