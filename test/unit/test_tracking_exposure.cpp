@@ -12,6 +12,8 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -228,6 +230,20 @@ TEST(PatchAlign, GainCompensationRecoversShiftUnderContrastChange) {
     EXPECT_LT(p90(err_with), 0.15) << "gain " << g;
     EXPECT_LT(p90(err_with), 1.5 * p90(err_plain) + 0.01) << "gain " << g;
     EXPECT_GT(p90(err_without), 0.3) << "gain " << g;
+  }
+}
+
+TEST(TrackerConfig, ValidateNamesTheExposureFields) {
+  for (const char* field : {"strength_ratio_min_change", "align_gain_min_change"}) {
+    vt::TrackerConfig c;
+    EXPECT_NO_THROW(c.validate());
+    (std::string(field) == "align_gain_min_change" ? c.align_gain_min_change : c.strength_ratio_min_change) = -0.1;
+    try {
+      c.validate();
+      ADD_FAILURE() << field << ": expected invalid_argument";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
   }
 }
 
