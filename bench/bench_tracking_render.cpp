@@ -4,6 +4,12 @@
 // scene's room and boxes) is projected (with distortion) into frame k; a track
 // step is an inlier when it lands within 1 px of that reprojection.
 //   bench_tracking_render RENDER_DIR [--start K] [--frames N] [--max-points N] [--threads N] [--per-frame 1]
+// --per-frame 1 prints per frame (stderr) the tracked/new counts, the frame's
+// curvature scale, median strength ratio and patch gain, the losses by check and
+// the steps' precision: run it on an exposure step (exposure.csv of the render)
+// with --start N --frames N. Most TrackerConfig fields have a switch (see the
+// option list below), e.g. --relative-strength 0 --floor-follows 0 --align-gain 0
+// for the tracker of before the exposure-step handling.
 // Track length is given three ways: over every track ever started (most new
 // extrema end at their first step, so this median is 1-2), over the tracks that
 // survived their first step, and as the median age of the tracked points of a
