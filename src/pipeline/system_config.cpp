@@ -86,9 +86,14 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("tracker", "min_track_curvature", &t.min_track_curvature));
   f.push_back(field("tracker", "noise_reference", &t.noise_reference));
   f.push_back(field("tracker", "min_track_sharpness", &t.min_track_sharpness));
+  f.push_back(field("tracker", "relative_strength_change", &t.relative_strength_change));
+  f.push_back(field("tracker", "strength_ratio_min_change", &t.strength_ratio_min_change));
+  f.push_back(field("tracker", "floor_follows_exposure", &t.floor_follows_exposure));
   f.push_back(field("tracker", "strength_at_subpixel_peak", &t.strength_at_subpixel_peak));
   f.push_back(field("tracker", "extremum_weight", &t.extremum_weight));
   f.push_back(field("tracker", "align_radius_px", &t.align_radius_px));
+  f.push_back(field("tracker", "align_gain", &t.align_gain));
+  f.push_back(field("tracker", "align_gain_min_change", &t.align_gain_min_change));
   f.push_back(field("tracker", "max_align_disagreement_px", &t.max_align_disagreement_px));
   f.push_back(field("tracker", "confirm_max_unaligned_fraction", &t.confirm_max_unaligned_fraction));
   f.push_back(field("tracker", "threads", &t.threads));
