@@ -9,7 +9,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -190,7 +189,7 @@ class Progress {
  private:
   std::size_t total_;
   bool quiet_, tty_;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  vitamin_e::TimingClock::time_point start_ = vitamin_e::TimingClock::now();
   double last_ = -1e9;
 };
 
@@ -257,7 +256,7 @@ int run(const Options& o) {
   stats.dataset_kind = dataset->kind();
   stats.config = o.config;
   Progress progress(end - o.start_frame, o.quiet);
-  const auto t_start = std::chrono::steady_clock::now();
+  const auto t_start = vitamin_e::TimingClock::now();
   std::size_t attempted = 0;
   // Everything done with a frame's result: stats, progress, per-frame log, dense
   // mapping. Runs on the main thread (sequential) or the mapping thread
@@ -288,7 +287,7 @@ int run(const Options& o) {
   for (std::size_t i = o.start_frame; i < end && !g_stop; ++i) {
     ++attempted;
     cv::Mat image;
-    const auto t_load = std::chrono::steady_clock::now();
+    const auto t_load = vitamin_e::TimingClock::now();
     try {
       image = dataset->loadImage(i);
     } catch (const io::DatasetError& e) {
@@ -340,7 +339,7 @@ int run(const Options& o) {
                  "%zu map points\n",
                  stats.frames, stats.tracked_frames, 100.0 * stats.successRate(), stats.skipped_frames,
                  stats.init_retries, stats.relocalizations, stats.map_points);
-    std::fprintf(stderr, "%s", io::timingTable(stats.timing).c_str());
+    std::fprintf(stderr, "%s", stats.timing.table(io::reportStages(stats.timing)).c_str());
     std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s%s%s (peak RSS %.0f MB)\n", traj_path.c_str(),
                  stats_path.c_str(), ply_path.c_str(), dense ? ", " : "", dense ? mesh_path.c_str() : "",
                  stats.peak_rss_mb);
