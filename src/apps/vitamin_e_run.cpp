@@ -51,7 +51,9 @@ const char* kUsage =
     "  --pipelined      tracking and mapping on two threads (frame k+1 is tracked while k is mapped);\n"
     "                   default: sequential, deterministic\n"
     "  --log-frames     print one line per frame on stdout: index, time, state, tracks, mapped, ms, message\n"
-    "  --print-config   print every SLAM parameter in force (defaults + --config) and exit\n"
+    "  --print-config   print every SLAM parameter in force (defaults + --config), as a config file, and exit\n"
+    "  --print-config-markdown  print the configuration reference (docs/CONFIG.md: every key, its\n"
+    "                   default and meaning) and exit\n"
     "  --check          no SLAM: read every frame and print 'index timestamp WxH mean' lines\n"
     "                   on stdout (a dataset check; --out is not needed)\n";
 
@@ -76,6 +78,7 @@ struct Options {
   bool quiet = false;
   bool check = false;
   bool print_config = false;
+  bool print_reference = false;
   bool log_frames = false;
   bool pipelined = false;
 };
@@ -119,6 +122,10 @@ Options parseArgs(int argc, char** argv) {
       o.print_config = true;
       continue;
     }
+    if (a == "--print-config-markdown") {
+      o.print_reference = true;
+      continue;
+    }
     if (i + 1 >= argc) fail(a.rfind("--", 0) == 0 ? a + " needs a value" : "unexpected argument '" + a + "'");
     const std::string v = argv[++i];
     if (a == "--dataset") o.dataset = v;
@@ -130,7 +137,7 @@ Options parseArgs(int argc, char** argv) {
     else if (a == "--start-frame") o.start_frame = parseCount(a, v);
     else fail("unknown option '" + a + "' (see --help)");
   }
-  if (o.print_config) return o;
+  if (o.print_config || o.print_reference) return o;
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
   if (o.out.empty() && !o.check) fail("--out DIR is required (see --help)");
   return o;
@@ -213,6 +220,10 @@ int checkFrames(const io::Dataset& dataset, std::size_t begin, std::size_t end) 
 }
 
 int run(const Options& o) {
+  if (o.print_reference) {
+    std::cout << pl::configReferenceMarkdown();
+    return 0;
+  }
   const pl::SystemConfig config = o.check ? pl::SystemConfig{} : loadConfig(o.config);
   if (o.print_config) {
     std::cout << config.describe();
