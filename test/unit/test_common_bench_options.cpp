@@ -62,7 +62,7 @@ class BenchOptions : public ::testing::Test {
 
 // Per benchmark: an option that takes a number (CMake builds bench/bench_*.cpp into the same folder).
 const std::map<std::string, std::string> kNumberOption = {
-    {"bench_fusion_dense", "--step"},
+    {"bench_fusion_dense", "--step"},         {"bench_meshing_delaunay", "--points"},
     {"bench_optimization_ba", "--threads"},   {"bench_system_soak", "--minutes"},
     {"bench_tracking_render", "--per-frame"},
 };
@@ -110,6 +110,7 @@ TEST_F(BenchOptions, BadOptionsAreOneErrorLineAndExitTwo) {
   expectOneError("bench_fusion_dense", (tmp_ / "none").string(), "not found");
   expectOneError("bench_optimization_ba", "--threads 0", "--threads");
   expectOneError("bench_system_soak", "--width 10", "--width");
+  expectOneError("bench_meshing_delaunay", "--repeats 0", "--repeats");
 }
 
 int main(int argc, char** argv) {
