@@ -44,7 +44,6 @@ struct System::Impl {
   bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
-  void addTiming(const std::string& stage, double ms);
 
   SystemConfig config;
   camera::Camera camera;
@@ -64,8 +63,7 @@ struct System::Impl {
   int lost_frames = 0;                // frames with features spent relocalizing since the loss
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
-  // both threads
-  std::mutex timings_mutex;
+  // both threads (StageTimings is thread-safe)
   StageTimings timings;
 };
 
