@@ -80,6 +80,9 @@ struct System::Impl {
   std::size_t mapped_last_frame = 0;  // map points tracked in the last tracked frame (not counting reuse)
   std::size_t reused_this_frame = 0;  // map points taken over by new tracks in this frame
   Eigen::Isometry3d T_w_cur = Eigen::Isometry3d::Identity();
+  // T_w_cur's covariance from the last per-frame BA (FrameResult::T_w_c_covariance).
+  Eigen::Matrix<double, 6, 6> cur_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  bool cur_covariance_valid = false;
 
   // motion model
   bool have_last_pose = false;

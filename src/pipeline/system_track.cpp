@@ -61,6 +61,7 @@ void System::Impl::track(FrameResult* result) {
     }
   }
   T_w_cur = T_w_c;
+  cur_covariance_valid = false;
   {
     const auto t0 = std::chrono::steady_clock::now();
     bundleAdjust(false);
@@ -111,6 +112,8 @@ void System::Impl::track(FrameResult* result) {
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_cur;
+  result->T_w_c_covariance = cur_covariance;
+  result->T_w_c_covariance_valid = cur_covariance_valid;
   // Map points handed to tracks by map reuse this frame are left out: they are
   // mostly on tracks born a frame ago, half of which end at their next step, so
   // counting them would make ordinary churn look like the map vanishing.
@@ -230,7 +233,12 @@ void System::Impl::bundleAdjust(bool keyframe_window) {
   if (problem.points.empty()) return;
   optimization::BaOptions options = config.ba;
   options.max_sweeps = keyframe_window ? config.ba_keyframe_sweeps : config.ba_frame_sweeps;
+  options.compute_covariance = !keyframe_window;  // the frame's pose covariance (FrameResult)
   const optimization::BaSummary summary = optimization::solveSubspaceGaussNewton(problem, options);
+  if (current_cam >= 0 && !summary.camera_covariance_valid.empty()) {
+    cur_covariance = summary.camera_covariance[current_cam];
+    cur_covariance_valid = summary.camera_covariance_valid[current_cam];
+  }
 
   // Write back (only finite results).
   for (std::size_t k = 0; k < kfs.size(); ++k) {
