@@ -337,25 +337,23 @@ void SubspaceGn::covariance(BaSummary* summary) {
   summary->camera_covariance_valid.assign(P_.cameras.size(), false);
   summary->residual_variance = 0.0;
   if (ncf == 0 || ncf > 100) return;
-  // The blocks at the solution (run() ends on a step applied after its last linearization).
-  linearize();
+  // The blocks of run()'s last linearization: at the solution, or one step before it when the
+  // sweeps ran out (relinearizing would cost as much as another sweep, for a change of the
+  // order of that last step).
   // The residual variance over the inliers, |r| < 3 robust sigma (outliers have ~no weight in S
-  // but would dominate a plain variance): c = sum_in |r|^2 / (2 m_in - 6 n_c - 3 n_p). Weighted
-  // or median-based scales are biased low here (few observations per point: the fit absorbs
-  // most of their residuals), by 2x and more at 1 px noise (test_optimization_covariance).
-  const double inlier_s = 9.0 * kernel_.sigma2;
+  // but would dominate a plain variance): c = sum_in |r|^2 / (2 m_in - 6 n_c - 3 n_p), from the
+  // final residuals of the observations touching a free variable. Weighted or median-based
+  // scales are biased low here (few observations per point: the fit absorbs most of their
+  // residuals), by 2x and more at 1 px noise (test_optimization_covariance).
+  const double inlier_px = 3.0 * std::sqrt(kernel_.sigma2);
   double sum_s = 0.0;
   int m = 0;
-  Eigen::Vector2d r;
-  auto add = [&](int k) {
-    if (!baResidual(P_, P_.observations[k], &r)) return;
-    const double s = r.squaredNorm();
-    if (s >= inlier_s) return;
-    sum_s += s;
+  for (std::size_t k = 0; k < summary->residual_px.size(); ++k) {
+    const double r = summary->residual_px[k];
+    if (fixed_norm_[k] >= 0.0 || !(r < inlier_px)) continue;
+    sum_s += r * r;
     ++m;
-  };
-  for (int k : pt_obs_) add(k);
-  for (int k : cam_only_obs_) add(k);
+  }
   const int dof = 2 * m - 6 * ncf - 3 * npf;
   if (dof <= 0) return;
   const double sigma2 = sum_s / dof;
@@ -432,13 +430,13 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   summary.initial_cost = solver.initialCost();
   summary.rejected_steps = solver.rejectedSteps();
   summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double final_cost = solver.finish(&summary.residual_px);
+  summary.final_cost = final_cost;
   if (options.compute_covariance) {
     const auto t0 = std::chrono::steady_clock::now();
     solver.covariance(&summary);
     summary.covariance_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
-  const double final_cost = solver.finish(&summary.residual_px);
-  summary.final_cost = final_cost;
   return summary;
 }
 
