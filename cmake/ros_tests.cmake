@@ -8,6 +8,7 @@ find_package(rostest REQUIRED)
 set(VE_TEST_DATA ${CMAKE_CURRENT_BINARY_DIR}/rostest_data)
 set(VE_TEST_OUT ${CMAKE_CURRENT_BINARY_DIR}/rostest_out)
 set(VE_TEST_FRAMES 60)
+set(VE_SOURCE_DIR ${CMAKE_CURRENT_SOURCE_DIR})
 file(MAKE_DIRECTORY ${VE_TEST_OUT})
 
 # The input sequence: the project's generator when it is built, else a room
@@ -19,7 +20,7 @@ if(TARGET vitamin_e_make_sequence)
     --make-bag ${CMAKE_CURRENT_SOURCE_DIR}/scripts/make_bag.sh)
   list(APPEND _ve_bag_deps vitamin_e_make_sequence)
 endif()
-add_custom_command(OUTPUT ${VE_TEST_DATA}/sequence.bag
+add_custom_command(OUTPUT ${VE_TEST_DATA}/sequence.bag ${VE_TEST_DATA}/sensors.bag
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/make_test_bag.py ${_ve_bag_args}
   DEPENDS ${_ve_bag_deps}
   COMMENT "rostest input sequence -> ${VE_TEST_DATA}")
