@@ -4,6 +4,10 @@
 # ./scripts/test.sh) runs it. One gtest executable (test/ros/test_ros_*.cpp,
 # main() in test_ros_nodelets.cpp) serves every .test file (--gtest_filter).
 find_package(rostest REQUIRED)
+find_package(roslaunch REQUIRED)
+# Every launch file parses and finds its packages and nodes (bag:= of euroc.launch has no
+# default: IGNORE_UNSET_ARGS).
+roslaunch_add_file_check(launch IGNORE_UNSET_ARGS)
 
 set(VE_TEST_DATA ${CMAKE_CURRENT_BINARY_DIR}/rostest_data)
 set(VE_TEST_OUT ${CMAKE_CURRENT_BINARY_DIR}/rostest_out)
@@ -44,10 +48,17 @@ endforeach()
 # launch ends itself when the bag ends, which would end a rostest too.
 #  - rostest_euroc_launch_imu: sensors.bag (with /imu0): the map's z within 5 deg of the true
 #    up, the ATE within 10 % of vitamin_e_run's on the same bag (issue 15, item 1)
+#  - rostest_install_space: make install; a package outside the tree links libvitamin_e from
+#    install/ and runs; euroc.launch runs from install/ only (item 7)
 if(TARGET vitamin_e_run AND TARGET vitamin_e_evaluate)
   add_test(NAME rostest_euroc_launch_imu
     COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_euroc_launch.py
       --data ${VE_TEST_DATA} --bag sensors.bag --out ${VE_TEST_OUT}/euroc_launch_imu
       --evaluate $<TARGET_FILE:vitamin_e_evaluate> --max-tilt-deg 5 --compare-offline $<TARGET_FILE:vitamin_e_run>)
-  set_tests_properties(rostest_euroc_launch_imu PROPERTIES TIMEOUT 400)
+  add_test(NAME rostest_install_space
+    COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_euroc_launch.py
+      --data ${VE_TEST_DATA} --bag sequence.bag --out ${VE_TEST_OUT}/install_space
+      --evaluate $<TARGET_FILE:vitamin_e_evaluate> --install ${CMAKE_BINARY_DIR}
+      --downstream ${CMAKE_CURRENT_SOURCE_DIR}/test/downstream)
+  set_tests_properties(rostest_euroc_launch_imu rostest_install_space PROPERTIES TIMEOUT 400)
 endif()
