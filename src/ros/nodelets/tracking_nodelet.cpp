@@ -377,7 +377,7 @@ void TrackingNodelet::processFrame(const cv::Mat& gray, const std_msgs::Header& 
 void TrackingNodelet::startSegment(const std::string& why) {
   if (system_) {
     TrajectorySegment done;
-    done.note = segment_note_;
+    done.note = segmentNote();
     for (auto e : system_->trajectory()) {
       e.T_w_c = T_map_w_ * e.T_w_c;
       done.poses.push_back(e);
@@ -394,6 +394,7 @@ void TrackingNodelet::startSegment(const std::string& why) {
   have_last_stamp_ = false;
   have_map_ = false;
   T_map_w_ = Eigen::Isometry3d::Identity();
+  map_description_.clear();
   last_map_points_ = ros::Time();
   track_history_.clear();
   path_.poses.clear();
@@ -402,11 +403,16 @@ void TrackingNodelet::startSegment(const std::string& why) {
   stats_.segment = segment_;
 }
 
+std::string TrackingNodelet::segmentNote() const {
+  // Why the segment began, and its map (each segment has its own).
+  return segment_note_ + (map_description_.empty() ? "" : "; " + map_description_);
+}
+
 std::vector<TrajectorySegment> TrackingNodelet::segments() const {
   std::vector<TrajectorySegment> all = finished_;
   if (system_) {
     TrajectorySegment current;
-    current.note = segment_note_;
+    current.note = segmentNote();
     for (auto e : system_->trajectory()) {
       e.T_w_c = T_map_w_ * e.T_w_c;
       current.poses.push_back(e);
@@ -445,8 +451,7 @@ bool TrackingNodelet::saveTrajectory(const std::string& path, std::string* messa
   const auto all = segments();
   std::size_t poses = 0;
   for (const auto& s : all) poses += s.poses.size();
-  const std::string header = "T_map_c: camera (optical) in '" + map_frame_ + "', " +
-                             (map_description_.empty() ? "map frame not fixed yet" : map_description_);
+  const std::string header = "T_map_c: camera (optical) in '" + map_frame_ + "'; each segment has its own map";
   if (!saveSegmentsTum(all, header, path, &error)) {
     *message = "cannot write trajectory " + path + ": " + error;
     return false;

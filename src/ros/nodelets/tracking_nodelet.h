@@ -63,6 +63,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   void startSegment(const std::string& why);
   // Poses of the finished segments and the current one, in the map frame (mutex_ held).
   std::vector<TrajectorySegment> segments() const;
+  std::string segmentNote() const;
 
   // The map frame (tracking_map_frame.cpp); mutex_ held.
   void alignMap(const vitamin_e::pipeline::FrameResult& result);
