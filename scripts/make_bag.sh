@@ -28,9 +28,10 @@ constant random bias (0.05 m/s^2, 0.005 rad/s per axis, 1 sigma).
 --compressed writes sensor_msgs/CompressedImage on <topic>/compressed as
 compressed_image_transport does ("mono8; jpeg compressed mono8"); --no-raw leaves the
 raw images out. --camera-info writes sensor_msgs/CameraInfo on <ns>/camera_info (K, D
-from cam0/sensor.yaml, plumb_bob; P the rectified camera); --rectified also writes the
-rectified image on <ns>/image_rect (OpenCV, P = getOptimalNewCameraMatrix(alpha 0), so
-P != K). A python3 script run by /usr/bin/python3 (Debian's rosbag module; the pyenv
+from cam0/sensor.yaml, plumb_bob; P the rectified camera: K's focal lengths, principal
+point at the image centre, so P != K), each written 1 ms before its
+image (same header stamp) so that the first image finds a calibration; --rectified also writes the
+rectified image on <ns>/image_rect (OpenCV remap to P). A python3 script run by /usr/bin/python3 (Debian's rosbag module; the pyenv
 python on PATH lacks it).
 """
 import argparse
@@ -279,7 +280,10 @@ def main():
     maps = None
     if args.camera_info or args.rectified:
         K, D, w, h = read_sensor_yaml(os.path.join(cam_dir, "sensor.yaml"))
-        P, _ = cv2.getOptimalNewCameraMatrix(K, D, (w, h), 0.0, (w, h))
+        # The rectified camera: K's focal lengths, the principal point at the image centre (P != K).
+        # Keeping the focal length keeps the resolution at the centre; getOptimalNewCameraMatrix
+        # (alpha 0) shrank it to 178 px/rad from 229 on the test camera and the ATE grew by 30 %.
+        P = np.array([[K[0, 0], 0.0, (w - 1) / 2.0], [0.0, K[1, 1], (h - 1) / 2.0], [0.0, 0.0, 1.0]])
         if args.rectified:
             maps = cv2.initUndistortRectifyMap(K, D, None, P, (w, h), cv2.CV_32FC1)
 
@@ -324,7 +328,9 @@ def main():
                 c.data = buf.tobytes()
                 bag.write(args.topic + "/compressed", c, t=stamp)
             if args.camera_info:
-                bag.write(ns_topic + "/camera_info", camera_info_msg(K, D, P, w, h, args.frame_id, stamp), t=stamp)
+                # Played 1 ms before its image, so that a subscriber has the calibration for the first image.
+                bag.write(ns_topic + "/camera_info", camera_info_msg(K, D, P, w, h, args.frame_id, stamp),
+                          t=stamp_of(max(0, ns - 1000000)))
             if maps is not None:
                 rect = cv2.remap(image, maps[0], maps[1], cv2.INTER_LINEAR)
                 r = Image()
