@@ -40,8 +40,8 @@ foreach(dir launch config rviz)
     install(DIRECTORY ${dir}/ DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION}/${dir})
   endif()
 endforeach()
-foreach(script make_bag.sh screenshot_rviz.sh)
-  if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/scripts/${script})
-    install(PROGRAMS scripts/${script} DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
-  endif()
-endforeach()
+# Scripts the launch files run (rosrun / <node type>): installed, so that a launch file
+# works from install/ as from devel/.
+catkin_install_python(PROGRAMS scripts/play_bag.py scripts/make_bag.sh
+  DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+install(PROGRAMS scripts/screenshot_rviz.sh DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})

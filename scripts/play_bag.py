@@ -7,7 +7,10 @@ as a subprocess, same arguments), then waits until the tracker's ~status reports
 that the last image of the bag was processed (or no progress for --idle-timeout s),
 and exits: as a required node it then ends the launch.
 
-  play_bag.py BAG [--rate R] [--start S] [--topic T] [--status /tracking/status] [--idle-timeout S]
+  play_bag.py BAG [--rate R] [--start S] [--topic T] [--also TOPIC ...] [--status /tracking/status]
+              [--idle-timeout S]
+
+--also: more topics played with the images (e.g. /imu0); a topic the bag lacks is skipped.
 """
 import argparse
 import subprocess
@@ -27,12 +30,14 @@ def main():
     ap.add_argument("--start", type=float, default=0.0)
     ap.add_argument("--topic", default="/cam0/image_raw")
     ap.add_argument("--status", default="/tracking/status")
+    ap.add_argument("--also", nargs="*", default=[])
     ap.add_argument("--idle-timeout", type=float, default=10.0)
     args = ap.parse_args(rospy.myargv()[1:])
 
     try:
         with rosbag.Bag(args.bag) as bag:
             stamps = [t.to_sec() for _, _, t in bag.read_messages(topics=[args.topic])]
+            in_bag = set(bag.get_type_and_topic_info().topics.keys())
     except Exception as e:  # unreadable or truncated bag: one clear line
         print("error: cannot read bag %s: %s" % (args.bag, e), file=sys.stderr)
         sys.exit(2)
@@ -52,8 +57,9 @@ def main():
                 state["last_change"] = time.monotonic()
 
     rospy.Subscriber(args.status, TrackingStatus, on_status, queue_size=100)
+    also = [t for t in args.also if t and t != args.topic and t in in_bag]
     cmd = ["rosbag", "play", "--clock", "--quiet", "-r", str(args.rate), "-s", str(args.start),
-           "--wait-for-subscribers", args.bag, "--topics", args.topic]
+           "--wait-for-subscribers", args.bag, "--topics", args.topic] + also
     rc = subprocess.call(cmd)
     if rc != 0:
         print("error: rosbag play exited with %d" % rc, file=sys.stderr)

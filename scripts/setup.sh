@@ -12,6 +12,7 @@ PACKAGES=(
   librosbag-dev python3-rosbag python3-roslaunch python3-rostest librostest-dev rosbash rospack-tools
   rviz libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libgtest-dev googletest
   python3-rostopic python3-rosnode python3-rosmsg python3-rosservice
+  libdiagnostic-updater-dev libdiagnostic-msgs-dev python3-diagnostic-msgs
   python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs python3-std-srvs
   ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-std-srvs
   python3-numpy python3-yaml python3-matplotlib python3-opencv

@@ -331,6 +331,68 @@ void SubspaceGn::pointUpdates() {
 
 namespace detail {
 
+void SubspaceGn::covariance(BaSummary* summary) {
+  const int ncf = freeCameras();
+  const int npf = freePoints();
+  summary->camera_covariance.assign(P_.cameras.size(), Matrix6d::Zero());
+  summary->camera_covariance_valid.assign(P_.cameras.size(), false);
+  summary->residual_variance = 0.0;
+  if (ncf == 0 || ncf > 100) return;
+  // The blocks of run()'s last linearization: at the solution, or one step before it when the
+  // sweeps ran out (relinearizing would cost as much as another sweep, for a change of the
+  // order of that last step).
+  // The residual variance over the inliers, |r| < 3 robust sigma (outliers have ~no weight in S
+  // but would dominate a plain variance): c = sum_in |r|^2 / (2 m_in - 6 n_c - 3 n_p), from the
+  // final residuals of the observations touching a free variable. Weighted or median-based
+  // scales are biased low here (few observations per point: the fit absorbs most of their
+  // residuals), by 2x and more at 1 px noise (test_optimization_covariance).
+  const double inlier_px = 3.0 * std::sqrt(kernel_.sigma2);
+  double sum_s = 0.0;
+  int m = 0;
+  for (std::size_t k = 0; k < summary->residual_px.size(); ++k) {
+    const double r = summary->residual_px[k];
+    if (fixed_norm_[k] >= 0.0 || !(r < inlier_px)) continue;
+    sum_s += r * r;
+    ++m;
+  }
+  const int dof = 2 * m - 6 * ncf - 3 * npf;
+  if (dof <= 0) return;
+  const double sigma2 = sum_s / dof;
+  // Dense reduced camera system (6 ncf square; the per-frame BA has one free camera):
+  // S = H_cc - sum_j H_cp,j H_pp,j^-1 H_pc,j, H_cp = Jc^T Wjp per slot. With use_schur, Hcc_
+  // holds only the observations of fixed points, so the slots' own Jc^T w Jc are added here.
+  const int n = 6 * ncf;
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < ncf; ++i) S.block<6, 6>(6 * i, 6 * i) = Hcc_[i];
+  for (int j = 0; j < npf; ++j) {
+    Eigen::Matrix3d H = Hpp_[j];
+    H.diagonal() += Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
+    const Eigen::Matrix3d Hi = H.inverse();
+    for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s) {
+      const int cs = slot_cam_[s];
+      if (O_.use_schur) S.block<6, 6>(6 * cs, 6 * cs).noalias() += Jc_[s].transpose() * slot_w_[s] * Jc_[s];
+      const Matrix23d Z = Wjp_[s] * Hi;
+      for (int u = slot_begin_[j]; u < slot_begin_[j + 1]; ++u) {
+        const Eigen::Matrix2d M = Z * Wjp_[u].transpose();
+        S.block<6, 6>(6 * cs, 6 * slot_cam_[u]).noalias() -= Jc_[s].transpose() * M * Jc_[u];
+      }
+    }
+  }
+  S = 0.5 * (S + S.transpose()).eval();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
+  if (eig.info() != Eigen::Success) return;
+  const double lo = eig.eigenvalues().minCoeff(), hi = eig.eigenvalues().maxCoeff();
+  if (!(lo > 1e-12 * hi) || !std::isfinite(hi)) return;  // a gauge freedom or an unobserved direction
+  const Eigen::MatrixXd S_inv =
+      eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  for (int i = 0; i < ncf; ++i) {
+    Matrix6d C = sigma2 * S_inv.block<6, 6>(6 * i, 6 * i);
+    summary->camera_covariance[cams_[i]] = 0.5 * (C + C.transpose());
+    summary->camera_covariance_valid[cams_[i]] = true;
+  }
+  summary->residual_variance = sigma2;
+}
+
 double SubspaceGn::finish(std::vector<double>* residual_px) const {
   // The formulas of baCost and baResidualNorms; the constant part is buildStructure's.
   residual_px->resize(P_.observations.size());
@@ -371,6 +433,11 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   summary.time_ms = elapsedMs(start);
   const double final_cost = solver.finish(&summary.residual_px);
   summary.final_cost = final_cost;
+  if (options.compute_covariance) {
+    const auto t0 = std::chrono::steady_clock::now();
+    solver.covariance(&summary);
+    summary.covariance_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
   return summary;
 }
 

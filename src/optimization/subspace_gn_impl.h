@@ -89,6 +89,8 @@ class SubspaceGn {
   // After run(): every observation's residual norm (baResidualNorms) and the final cost
   // (baCost), evaluating only the observations that touch a free variable.
   double finish(std::vector<double>* residual_px) const;
+  // After run(): BaOptions::compute_covariance (see there), into summary's covariance fields.
+  void covariance(BaSummary* summary);
 
  private:
   void buildStructure();

@@ -137,6 +137,8 @@ std::vector<Field> configTable(SystemConfig& c) {
   using Solver = optimization::BaOptions::CameraSolver;
   t.key("robust_sigma_px", &b.robust_sigma_px, "Geman-McClure sigma [px]");
   t.internal("max_sweeps", &b.max_sweeps, "per solve: pipeline.ba_frame_sweeps or pipeline.ba_keyframe_sweeps");
+  t.internal("compute_covariance", &b.compute_covariance,
+             "the per-frame BA returns the frame's pose covariance (FrameResult::T_w_c_covariance), the keyframe BA not");
   t.key("tolerance", &b.tolerance, "converged when an accepted sweep changes the cost by less than this (relative)");
   t.key("threads", &b.threads, "threads for the loops over points (1 = serial)");
   t.key("use_schur", &b.use_schur, "eliminate the points inside each camera update (Schur complement)");

@@ -12,12 +12,13 @@ namespace vitamin_e::pipeline {
 
 Mapper::Mapper(const SystemConfig& config, const camera::Camera& camera) : config_(config), camera_(camera) {}
 
-std::vector<std::uint64_t> Mapper::refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c,
-                                               map::Map* map) const {
+FrameRefinement Mapper::refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c, map::Map* map) const {
   return bundleAdjust(&frame, T_w_c, map);
 }
 
-std::vector<std::uint64_t> Mapper::optimizeWindow(map::Map* map) const { return bundleAdjust(nullptr, nullptr, map); }
+std::vector<std::uint64_t> Mapper::optimizeWindow(map::Map* map) const {
+  return bundleAdjust(nullptr, nullptr, map).removed;
+}
 
 std::vector<std::uint64_t> Mapper::penalize(const std::vector<std::uint64_t>& ids, map::Map* map) const {
   std::vector<std::uint64_t> removed;
@@ -29,8 +30,7 @@ std::vector<std::uint64_t> Mapper::penalize(const std::vector<std::uint64_t>& id
 }
 
 // frame == null: keyframe window BA; otherwise the per-frame BA of frame at *T_w_c.
-std::vector<std::uint64_t> Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c,
-                                                map::Map* map) const {
+FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const {
   const bool keyframe_window = frame == nullptr;
   optimization::BaProblem problem;
   problem.fx = camera_.fx();
@@ -106,10 +106,16 @@ std::vector<std::uint64_t> Mapper::bundleAdjust(const FrameContext* frame, Eigen
       problem.observations.push_back({current_cam, p, to_px(frame->tracks[i].xy)});
     }
   }
-  if (problem.points.empty()) return {};
+  FrameRefinement out;
+  if (problem.points.empty()) return out;
   optimization::BaOptions options = config_.ba;
   options.max_sweeps = keyframe_window ? config_.ba_keyframe_sweeps : config_.ba_frame_sweeps;
+  options.compute_covariance = !keyframe_window;  // the frame's pose covariance (FrameResult)
   const optimization::BaSummary summary = optimization::solveSubspaceGaussNewton(problem, options);
+  if (current_cam >= 0 && static_cast<std::size_t>(current_cam) < summary.camera_covariance_valid.size()) {
+    out.covariance = summary.camera_covariance[current_cam];
+    out.covariance_valid = summary.camera_covariance_valid[current_cam];
+  }
 
   // Write back (only finite results).
   for (std::size_t k = 0; k < kfs.size(); ++k) {
@@ -133,7 +139,8 @@ std::vector<std::uint64_t> Mapper::bundleAdjust(const FrameContext* frame, Eigen
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (bad[i]) offenders.push_back(ids[i]);
   }
-  return penalize(offenders, map);
+  out.removed = penalize(offenders, map);
+  return out;
 }
 
 bool Mapper::needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const {

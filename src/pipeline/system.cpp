@@ -229,8 +229,11 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
   Eigen::Isometry3d T_w_c = pose.T_w_c;
   reuse.associate(frame, T_w_c, scene_depth, &map, true);
   frame.lookup(map);
-  endTracks(mapper.refineFrame(frame, &T_w_c, &map), frame);
+  const FrameRefinement refined = mapper.refineFrame(frame, &T_w_c, &map);
+  endTracks(refined.removed, frame);
   if (!T_w_c.matrix().allFinite()) return false;
+  result->T_w_c_covariance = refined.covariance;
+  result->T_w_c_covariance_valid = refined.covariance_valid;
   for (const map::Landmark* l : frame.landmarks) {
     if (l) map.markSeen(l->id, frame.frame_index);
   }
@@ -273,7 +276,10 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   }
   {
     ScopedTimer timer(&timings, "ba", &result->timing_ms);
-    endTracks(mapper.refineFrame(frame, &T_w_c, &map), frame);
+    const FrameRefinement refined = mapper.refineFrame(frame, &T_w_c, &map);
+    endTracks(refined.removed, frame);
+    result->T_w_c_covariance = refined.covariance;
+    result->T_w_c_covariance_valid = refined.covariance_valid;
   }
   // A pose must be finite and must not jump: a step far beyond the scene depth
   // is a failure, not motion.

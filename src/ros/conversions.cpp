@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
@@ -113,25 +114,111 @@ bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error) {
   return true;
 }
 
-Camera cameraFromInfo(const sensor_msgs::CameraInfo& info) {
-  const double fx = info.K[0], fy = info.K[4], cx = info.K[2], cy = info.K[5];
+Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
+  // Full-resolution intrinsics: P (rectified image, no distortion) or K and D (raw image).
+  double fx, fy, cx, cy;
+  if (rectified) {
+    fx = info.P[0], fy = info.P[5], cx = info.P[2], cy = info.P[6];
+    if (!(fx > 0.0) || !(fy > 0.0)) {
+      throw CalibrationError("camera_info: rectified image but P has no focal length (P = 0: an uncalibrated camera?)");
+    }
+  } else {
+    fx = info.K[0], fy = info.K[4], cx = info.K[2], cy = info.K[5];
+  }
+  // REP-104: the ROI is a window of the full-resolution image; binning then divides it.
+  const double bx = info.binning_x > 1 ? info.binning_x : 1.0;
+  const double by = info.binning_y > 1 ? info.binning_y : 1.0;
+  const bool roi = info.roi.width > 0 && info.roi.height > 0;
+  if (roi && (info.roi.x_offset + info.roi.width > info.width || info.roi.y_offset + info.roi.height > info.height)) {
+    throw CalibrationError("camera_info: roi " + std::to_string(info.roi.width) + "x" +
+                           std::to_string(info.roi.height) + "+" + std::to_string(info.roi.x_offset) + "+" +
+                           std::to_string(info.roi.y_offset) + " lies outside the " + std::to_string(info.width) +
+                           "x" + std::to_string(info.height) + " image");
+  }
+  const double full_w = roi ? info.roi.width : info.width;
+  const double full_h = roi ? info.roi.height : info.height;
+  const int width = static_cast<int>(full_w / bx);
+  const int height = static_cast<int>(full_h / by);
+  if (roi) {
+    cx -= info.roi.x_offset;
+    cy -= info.roi.y_offset;
+  }
+  // A binned pixel u covers full-resolution pixels [bx u, bx u + bx): its centre is at
+  // bx u + (bx - 1) / 2 (image_geometry's cx / bx drops that half-pixel shift).
+  fx /= bx;
+  cx = (cx + 0.5) / bx - 0.5;
+  fy /= by;
+  cy = (cy + 0.5) / by - 0.5;
+
   const std::string& m = info.distortion_model;
   std::vector<double> d(info.D.begin(), info.D.end());
   const bool all_zero = std::all_of(d.begin(), d.end(), [](double v) { return v == 0.0; });
-  if (d.empty() || all_zero) {
-    return Camera(static_cast<int>(info.width), static_cast<int>(info.height), fx, fy, cx, cy);
-  }
+  if (rectified || d.empty() || all_zero) return Camera(width, height, fx, fy, cx, cy);
   if (m == "plumb_bob" || m == "rational_polynomial") {
+    // The core's radial-tangential model has k1 k2 p1 p2 k3: refuse what it would silently drop.
+    for (std::size_t k = 5; k < d.size(); ++k) {
+      if (d[k] != 0.0) {
+        throw CalibrationError("camera_info: " + m + " coefficient D[" + std::to_string(k) + "] = " +
+                               std::to_string(d[k]) +
+                               " is not supported (only k1 k2 p1 p2 k3; the rational k4..k6 must be 0): "
+                               "publish the rectified image (image_rect) or calibrate with plumb_bob");
+      }
+    }
     if (d.size() > 5) d.resize(5);
     if (d.size() == 5 && d[4] == 0.0) d.resize(4);
-    return Camera(static_cast<int>(info.width), static_cast<int>(info.height), fx, fy, cx, cy,
-                  DistortionModel::kRadialTangential, d);
+    return Camera(width, height, fx, fy, cx, cy, DistortionModel::kRadialTangential, d);
   }
   if (m == "equidistant" || m == "fisheye") {
-    return Camera(static_cast<int>(info.width), static_cast<int>(info.height), fx, fy, cx, cy,
-                  DistortionModel::kEquidistant, d);
+    return Camera(width, height, fx, fy, cx, cy, DistortionModel::kEquidistant, d);
   }
   throw CalibrationError("camera_info: unsupported distortion_model '" + m + "'");
+}
+
+bool isRectifiedTopic(const std::string& topic) {
+  const std::size_t slash = topic.find_last_of('/');
+  const std::string last = slash == std::string::npos ? topic : topic.substr(slash + 1);
+  return last.rfind("image_rect", 0) == 0;
+}
+
+bool compressedToMono8(const sensor_msgs::CompressedImage& msg, cv::Mat* gray, std::string* error) {
+  if (msg.format.find("compressedDepth") != std::string::npos) {
+    *error = "compressedDepth images are not camera images (format '" + msg.format + "')";
+    return false;
+  }
+  if (msg.data.empty()) {
+    *error = "empty compressed image (format '" + msg.format + "')";
+    return false;
+  }
+  cv::Mat decoded;
+  try {
+    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(msg.data.size()), CV_8UC1,
+                                   const_cast<std::uint8_t*>(msg.data.data())),
+                           cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    decoded.release();
+  }
+  if (decoded.empty()) {
+    *error = "cannot decode the compressed image (format '" + msg.format + "', " + std::to_string(msg.data.size()) +
+             " bytes)";
+    return false;
+  }
+  // OpenCV decodes colour as BGR(A) whatever the original encoding was.
+  if (decoded.depth() == CV_16U) decoded.convertTo(decoded, CV_8U, 1.0 / 256.0);
+  if (decoded.depth() != CV_8U) {
+    *error = "unsupported decoded image depth (format '" + msg.format + "')";
+    return false;
+  }
+  if (decoded.channels() == 1) {
+    *gray = decoded;
+  } else if (decoded.channels() == 3) {
+    cv::cvtColor(decoded, *gray, cv::COLOR_BGR2GRAY);
+  } else if (decoded.channels() == 4) {
+    cv::cvtColor(decoded, *gray, cv::COLOR_BGRA2GRAY);
+  } else {
+    *error = "unsupported channel count " + std::to_string(decoded.channels());
+    return false;
+  }
+  return true;
 }
 
 std::string distortionName(DistortionModel model) {

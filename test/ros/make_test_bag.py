@@ -9,6 +9,13 @@ OUT_DIR/calibration.yaml (EuRoC sensor.yaml format) and OUT_DIR/groundtruth.tum
 (T_w_c of every frame). With --generator (the project's vitamin_e_make_sequence)
 the sequence comes from it and --make-bag (scripts/make_bag.sh) bags it;
 otherwise the room is ray-cast here with numpy.
+
+With the generator, also OUT_DIR/sensors.bag: the same images with everything the
+ROS-interface tests need (issue 15): /imu0 synthesized by make_bag.sh --imu,
+/cam0/image_raw/compressed (jpeg), /cam0/camera_info and /cam0/image_rect. The
+generator's body is its camera; here the sequence gets EuRoC's body instead (its
+cam0 T_BS, x up), written as the body ground truth and the calibration's T_BS, so
+the camera -> IMU rotation is exercised as on EuRoC.
 """
 import argparse
 import glob
@@ -122,6 +129,46 @@ def draw(out_dir, frames):
                 % (WIDTH, HEIGHT, FX, FY, CX, CY))
 
 
+# EuRoC cam0's T_BS (camera in body; the body = IMU frame has x up).
+T_BS_EUROC = np.array([[0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975],
+                       [0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768],
+                       [-0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949],
+                       [0.0, 0.0, 0.0, 1.0]])
+
+
+def rot_of_quat(x, y, z, w):
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def use_euroc_body(seq):
+    """Re-expresses the body ground truth with EuRoC's T_BS: T_w_b = T_w_c T_BS^-1."""
+    sensor = glob.glob(os.path.join(seq, "**", "cam0", "sensor.yaml"), recursive=True)[0]
+    text = open(sensor).read()
+    start = text.index("T_BS:")
+    end = text.index("]", text.index("data:", start)) + 1
+    data = ", ".join("%.15g" % v for v in T_BS_EUROC.ravel())
+    text = text[:start] + "T_BS:\n  cols: 4\n  rows: 4\n  data: [" + data + "]" + text[end:]
+    open(sensor, "w").write(text)
+    T_cb = np.linalg.inv(T_BS_EUROC)
+    gt = glob.glob(os.path.join(seq, "groundtruth*tum*"))[0]
+    with open(gt) as f, open(os.path.join(seq, "mav0", "state_groundtruth_estimate0", "data.csv"), "w") as out:
+        out.write("#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []\n")
+        for line in f:
+            if line.startswith("#") or not line.strip():
+                continue
+            v = line.split()
+            sec, frac = v[0].split(".")
+            ns = int(sec) * 10**9 + int(frac.ljust(9, "0")[:9])
+            T = np.eye(4)
+            T[:3, :3] = rot_of_quat(*[float(a) for a in v[4:8]])
+            T[:3, 3] = [float(a) for a in v[1:4]]
+            T_wb = T @ T_cb
+            x, y, z, w = quat(T_wb[:3, :3])
+            out.write("%d,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n" % ((ns,) + tuple(T_wb[:3, 3]) + (w, x, y, z)))
+
+
 def generate(out_dir, frames, generator, make_bag):
     seq = os.path.join(out_dir, "generated")
     shutil.rmtree(seq, ignore_errors=True)
@@ -132,6 +179,9 @@ def generate(out_dir, frames, generator, make_bag):
     gt = glob.glob(os.path.join(seq, "groundtruth*tum*"))
     if not sensor or not gt:
         sys.exit("make_test_bag.py: generator output lacks cam0/sensor.yaml or a groundtruth .tum")
+    use_euroc_body(seq)
+    subprocess.check_call([make_bag, seq, os.path.join(out_dir, "sensors.bag"), "--imu", "--compressed", "jpeg",
+                           "--camera-info", "--rectified"])
     shutil.copy(sensor[0], os.path.join(out_dir, "calibration.yaml"))
     shutil.copy(gt[0], os.path.join(out_dir, "groundtruth.tum"))
 

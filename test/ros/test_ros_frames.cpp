@@ -3,7 +3,9 @@
 // is its camera pose, and never a second parent for the camera frame; runtime
 // parameters change through dynamic_reconfigure.
 #include <dynamic_reconfigure/Reconfigure.h>
+#include <Eigen/Eigenvalues>
 #include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Odometry.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <std_srvs/SetBool.h>
@@ -22,6 +24,7 @@ TEST(Rep105, MapToOdomCompletesTheCameraPose) {
   Watcher<vitamin_e::TrackingStatus> status(nh, "/tracking/status", 1000);
   Watcher<geometry_msgs::PoseStamped> pose(nh, "/tracking/pose", 1000);
   Watcher<tf2_msgs::TFMessage> tf(nh, "/tf", 1000);
+  Watcher<nav_msgs::Odometry> odom(nh, "/tracking/odometry", 1000);
 
   // odom -> base_link (odometry, here fixed) and base_link -> cam0 (the mounting).
   Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();
@@ -75,6 +78,21 @@ TEST(Rep105, MapToOdomCompletesTheCameraPose) {
       vitamin_e_ros::fromTransformMsg(map_odom.transform) * T_odom_base * T_base_cam;
   EXPECT_LT((composed.matrix() - T_w_c.matrix()).cwiseAbs().maxCoeff(), 1e-5)
       << "map->odom->base->cam:\n" << composed.matrix() << "\npose:\n" << T_w_c.matrix();
+
+  // Issue 15, item 5: ~odometry is the base's pose (child ~base_frame) with a covariance.
+  ASSERT_TRUE(odom.waitFor([&](const auto& m) { return !m.empty() && m.back()->header.stamp == last->header.stamp; },
+                           10.0));
+  const auto o = odom.messages().back();
+  EXPECT_EQ(o->child_frame_id, "base_link");
+  EXPECT_EQ(o->header.frame_id, "map");
+  const Eigen::Isometry3d T_map_base = vitamin_e_ros::fromPoseMsg(o->pose.pose);
+  EXPECT_LT((T_map_base.matrix() - (T_w_c * T_base_cam.inverse()).matrix()).cwiseAbs().maxCoeff(), 1e-5);
+  Eigen::Matrix<double, 6, 6> C;
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) C(r, c) = o->pose.covariance[6 * r + c];
+  using Solver = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>;
+  EXPECT_GT(Solver(C).eigenvalues().minCoeff(), 0.0) << C;
+  EXPECT_LT(C(0, 0), 1e3) << "no BA covariance on the last frame";
 }
 
 TEST(Rep105, DynamicReconfigure) {

@@ -304,6 +304,56 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
   }
 }
 
+// (c, issue 15 item 4) ~reset clears the last stamp (and the path): a frame older than the
+// last one is processed after it, in a new segment. A stamp jumping back by more than
+// ~time_jump_threshold (1 s) restarts the SLAM by itself; a small step back is still dropped.
+TEST_F(BadInput, ResetAndTimeJumpsStartNewSegments) {
+  Watcher<vitamin_e::TrackingStatus> status(nh_, "/tracking/status", 1000);
+  ASSERT_TRUE(status.waitForPublisher(30.0));
+  const auto deadline = ros::WallTime::now() + ros::WallDuration(30.0);
+  while (image_pub_.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.02).sleep();
+  ASSERT_GT(image_pub_.getNumSubscribers(), 0u);
+  // The status of the frame stamped t (each frame's status carries its image's stamp).
+  auto statusOf = [&](double t) -> vitamin_e::TrackingStatus::ConstPtr {
+    vitamin_e::TrackingStatus::ConstPtr found;
+    status.waitFor(
+        [&](const Statuses& s) {
+          for (const auto& m : s)
+            if (std::abs(m->header.stamp.toSec() - t) < 1e-3) found = m;
+          return found != nullptr;
+        },
+        20.0);
+    return found;
+  };
+  const double t0 = 1.9e9;  // after every stamp of the other BadInput tests
+  bool first = false;
+  for (int attempt = 0; attempt < 50 && !first; ++attempt) {
+    image_pub_.publish(image(t0 + 0.001 * attempt, "mono8", 160, 120, 1));
+    first = status.waitFor([](const Statuses& s) { return !s.empty(); }, 0.2);
+  }
+  ASSERT_TRUE(first);
+  image_pub_.publish(image(t0 + 10.0, "mono8", 160, 120, 1));
+  const auto before = statusOf(t0 + 10.0);
+  ASSERT_TRUE(before);
+
+  std_srvs::Trigger reset;
+  ASSERT_TRUE(ros::service::call("/tracking/reset", reset));
+  EXPECT_TRUE(reset.response.success) << reset.response.message;
+  image_pub_.publish(image(t0 + 9.5, "mono8", 160, 120, 1));  // 0.5 s before the last frame
+  const auto after_reset = statusOf(t0 + 9.5);
+  ASSERT_TRUE(after_reset) << "after ~reset, a frame older than the last was not processed";
+  EXPECT_EQ(after_reset->segment, before->segment + 1);
+  EXPECT_EQ(after_reset->frames_processed, before->frames_processed + 1) << "counts go on over segments";
+
+  image_pub_.publish(image(t0 + 9.2, "mono8", 160, 120, 1));  // 0.3 s back: dropped
+  image_pub_.publish(image(t0 + 2.0, "mono8", 160, 120, 1));  // 7.5 s back: a new SLAM run
+  const auto after_jump = statusOf(t0 + 2.0);
+  ASSERT_TRUE(after_jump) << "a frame after a jump back in time was not processed";
+  EXPECT_EQ(after_jump->segment, before->segment + 2);
+  EXPECT_EQ(after_jump->frames_processed, after_reset->frames_processed + 1) << "the 0.3 s step back was processed";
+  for (const auto& m : status.messages()) EXPECT_GT(std::abs(m->header.stamp.toSec() - (t0 + 9.2)), 1e-3);
+}
+
 // (d, issue 7) ~trajectory_file and ~map_file are written when the tracking
 // nodelet goes away, as on SIGINT of its manager: loaded in this process with a
 // nodelet::Loader, fed the test bag's images, then unloaded.
@@ -344,6 +394,13 @@ TEST(ShutdownSave, TrajectoryAndMapWrittenOnUnload) {
     }
     EXPECT_TRUE(status.waitFor([&](const Statuses& s) { return framesProcessed(s) >= images.size(); }, 60.0))
         << "frames processed: " << framesProcessed(status.messages()) << " of " << images.size();
+    // The status comes before the frame's callback ends. A service call is served on the same
+    // callback queue, so when it returns the last image callback is done: unloading a nodelet
+    // while one of its callbacks runs makes nodelet::Loader delete it after its callback
+    // queues (roscpp then crashes removing the publishers' callbacks).
+    vitamin_e::SaveFile idle;
+    idle.request.path = out + "/shutdown_trajectory_before_unload.txt";
+    ASSERT_TRUE(ros::service::call("/saver/save_trajectory", idle));
     ASSERT_TRUE(loader.unload("/saver"));
   }
   // trajectory.txt: a header and finite TUM lines; points.ply: a complete header.

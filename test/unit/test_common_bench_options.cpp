@@ -63,7 +63,8 @@ class BenchOptions : public ::testing::Test {
 // Per benchmark: an option that takes a number (CMake builds bench/bench_*.cpp into the same folder).
 const std::map<std::string, std::string> kNumberOption = {
     {"bench_fusion_dense", "--step"},         {"bench_meshing_delaunay", "--points"},
-    {"bench_optimization_ba", "--threads"},   {"bench_system_soak", "--minutes"},
+    {"bench_optimization_ba", "--threads"},   {"bench_optimization_covariance", "--points"},
+    {"bench_system_soak", "--minutes"},
     {"bench_tracking_render", "--per-frame"},
 };
 

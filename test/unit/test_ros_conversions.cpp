@@ -8,6 +8,8 @@
 #include <cstring>
 #include <limits>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
@@ -213,6 +215,116 @@ TEST(RosConversions, CloudsHoldExactlyThePointsGiven) {
   sensor_msgs::PointCloud2 empty;
   vitamin_e_ros::fillCloud(h, {}, {}, &empty);
   EXPECT_EQ(empty.width * empty.height, 0u);
+}
+
+
+// Issue 15, item 2: a rectified stream takes P and no distortion; rational_polynomial is
+// refused when k4..k6 are not zero; binning and ROI give the image's own intrinsics.
+TEST(RosConversions, CameraInfoRectifiedRationalBinningAndRoi) {
+  using vitamin_e::camera::DistortionModel;
+  sensor_msgs::CameraInfo info;
+  info.width = 752;
+  info.height = 480;
+  info.K = {458.0, 0.0, 367.0, 0.0, 457.0, 248.0, 0.0, 0.0, 1.0};
+  info.P = {380.0, 0.0, 370.0, 0.0, 0.0, 381.0, 240.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+  info.distortion_model = "plumb_bob";
+  info.D = {-0.28, 0.07, 0.0002, 0.00002, 0.0};
+  const auto raw = vitamin_e_ros::cameraFromInfo(info, false);
+  EXPECT_EQ(raw.model(), DistortionModel::kRadialTangential);
+  EXPECT_DOUBLE_EQ(raw.fx(), 458.0);
+  EXPECT_EQ(raw.distortion().size(), 4u);
+  const auto rect = vitamin_e_ros::cameraFromInfo(info, true);
+  EXPECT_EQ(rect.model(), DistortionModel::kNone);
+  EXPECT_DOUBLE_EQ(rect.fx(), 380.0);
+  EXPECT_DOUBLE_EQ(rect.fy(), 381.0);
+  EXPECT_DOUBLE_EQ(rect.cx(), 370.0);
+  EXPECT_DOUBLE_EQ(rect.cy(), 240.0);
+  // P = 0 (camera_info of an uncalibrated camera) cannot describe a rectified image.
+  sensor_msgs::CameraInfo no_p = info;
+  no_p.P.fill(0.0);
+  EXPECT_THROW(vitamin_e_ros::cameraFromInfo(no_p, true), vitamin_e::camera::CalibrationError);
+
+  EXPECT_TRUE(vitamin_e_ros::isRectifiedTopic("/cam0/image_rect"));
+  EXPECT_TRUE(vitamin_e_ros::isRectifiedTopic("/cam0/image_rect_color"));
+  EXPECT_TRUE(vitamin_e_ros::isRectifiedTopic("image_rect"));
+  EXPECT_FALSE(vitamin_e_ros::isRectifiedTopic("/cam0/image_raw"));
+  EXPECT_FALSE(vitamin_e_ros::isRectifiedTopic("/image_rect/image_raw"));
+
+  // rational_polynomial: zeros beyond k3 are fine, anything else is refused by name.
+  sensor_msgs::CameraInfo rational = info;
+  rational.distortion_model = "rational_polynomial";
+  rational.D = {-0.28, 0.07, 0.0002, 0.00002, 0.01, 0.0, 0.0, 0.0};
+  EXPECT_EQ(vitamin_e_ros::cameraFromInfo(rational).distortion().size(), 5u);
+  rational.D[5] = 0.3;
+  try {
+    vitamin_e_ros::cameraFromInfo(rational);
+    ADD_FAILURE() << "rational_polynomial with k4 != 0 accepted";
+  } catch (const vitamin_e::camera::CalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("D[5]"), std::string::npos) << e.what();
+  }
+  // The rectified stream does not use D at all.
+  EXPECT_NO_THROW(vitamin_e_ros::cameraFromInfo(rational, true));
+
+  // ROI 400x300 at (100, 60), binning 2: a 200x150 image; the principal point moves with the
+  // window and the binned pixel centres.
+  sensor_msgs::CameraInfo binned = info;
+  binned.roi.x_offset = 100;
+  binned.roi.y_offset = 60;
+  binned.roi.width = 400;
+  binned.roi.height = 300;
+  binned.binning_x = binned.binning_y = 2;
+  const auto b = vitamin_e_ros::cameraFromInfo(binned);
+  EXPECT_EQ(b.width(), 200);
+  EXPECT_EQ(b.height(), 150);
+  EXPECT_DOUBLE_EQ(b.fx(), 229.0);
+  EXPECT_DOUBLE_EQ(b.fy(), 228.5);
+  EXPECT_DOUBLE_EQ(b.cx(), (367.0 - 100.0 + 0.5) / 2.0 - 0.5);
+  EXPECT_DOUBLE_EQ(b.cy(), (248.0 - 60.0 + 0.5) / 2.0 - 0.5);
+  // A full-resolution point projects to the binned pixel that covers it.
+  const Eigen::Vector3d p_c(0.3, -0.2, 2.0);
+  Eigen::Vector2d uv_full, uv_binned;
+  ASSERT_TRUE(raw.project(p_c, &uv_full));
+  ASSERT_TRUE(b.project(p_c, &uv_binned));
+  EXPECT_NEAR(uv_binned.x(), (uv_full.x() - 100.0 + 0.5) / 2.0 - 0.5, 1e-9);
+  EXPECT_NEAR(uv_binned.y(), (uv_full.y() - 60.0 + 0.5) / 2.0 - 0.5, 1e-9);
+  binned.roi.width = 700;  // 100 + 700 > 752
+  EXPECT_THROW(vitamin_e_ros::cameraFromInfo(binned), vitamin_e::camera::CalibrationError);
+}
+
+TEST(RosConversions, CompressedImagesDecodeToTheSameGray) {
+  cv::Mat gray(48, 64, CV_8UC1);
+  cv::randu(gray, 0, 255);
+  sensor_msgs::CompressedImage png;
+  png.format = "mono8; png compressed ";
+  std::vector<std::uint8_t> buf;
+  ASSERT_TRUE(cv::imencode(".png", gray, buf));
+  png.data = buf;
+  cv::Mat out;
+  std::string err;
+  ASSERT_TRUE(vitamin_e_ros::compressedToMono8(png, &out, &err)) << err;
+  EXPECT_EQ(cv::norm(out, gray, cv::NORM_INF), 0.0);  // png is lossless
+  // Colour JPEG (bgr8): converted to gray like a raw bgr8 image, up to JPEG's loss.
+  cv::Mat bgr;
+  cv::cvtColor(gray, bgr, cv::COLOR_GRAY2BGR);
+  cv::GaussianBlur(bgr, bgr, cv::Size(5, 5), 1.5);
+  cv::Mat expect;
+  cv::cvtColor(bgr, expect, cv::COLOR_BGR2GRAY);
+  sensor_msgs::CompressedImage jpeg;
+  jpeg.format = "bgr8; jpeg compressed bgr8";
+  ASSERT_TRUE(cv::imencode(".jpg", bgr, buf, {cv::IMWRITE_JPEG_QUALITY, 95}));
+  jpeg.data = buf;
+  ASSERT_TRUE(vitamin_e_ros::compressedToMono8(jpeg, &out, &err)) << err;
+  ASSERT_EQ(out.type(), CV_8UC1);
+  EXPECT_LT(cv::norm(out, expect, cv::NORM_L1) / out.total(), 3.0);
+  // Garbage and depth images are refused with a message.
+  sensor_msgs::CompressedImage bad = jpeg;
+  bad.data.assign(100, 7);
+  EXPECT_FALSE(vitamin_e_ros::compressedToMono8(bad, &out, &err));
+  EXPECT_NE(err.find("cannot decode"), std::string::npos) << err;
+  bad.format = "16UC1; compressedDepth";
+  EXPECT_FALSE(vitamin_e_ros::compressedToMono8(bad, &out, &err));
+  sensor_msgs::CompressedImage empty;
+  EXPECT_FALSE(vitamin_e_ros::compressedToMono8(empty, &out, &err));
 }
 
 int main(int argc, char** argv) {

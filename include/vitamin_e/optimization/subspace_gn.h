@@ -72,6 +72,18 @@ struct BaOptions {
   int point_extrapolation = 0;
   // A point stops iterating when a step decreases its cost by less than this fraction.
   double point_tolerance = 0.0;
+  // Also return each free camera's 6x6 covariance (BaSummary::camera_covariance): from the
+  // last linearization, the reduced camera system S = H_cc - H_cp H_pp^-1 H_pc (IRLS blocks
+  // J^T W J, points eliminated, no damping) and cov = c S^-1 (camera blocks of the inverse), c
+  // the residual variance of the inliers (|r| < 3 robust_sigma_px) at the solution:
+  // c = sum |r|^2 / (2 m - 6 n_c - 3 n_p) over those m observations. The last linearization is
+  // at the solution, or one step before it when max_sweeps ran out. Checked against a dense
+  // reference and against the spread of the solution over noise draws
+  // (test_optimization_covariance: within 30 %, on the conservative side); the IRLS-weighted
+  // variance would under-state the spread by 2x and more at 1 px noise. Off by default: the
+  // solve is the same either way; this adds the reduced system's assembly and a dense 6 n_c
+  // inverse (about 0.2 ms for 3,000 points and one free camera, see covariance_ms).
+  bool compute_covariance = false;
   void validate() const;         // throws std::invalid_argument naming the key
 };
 
@@ -87,6 +99,16 @@ struct BaSummary {
   int free_points = 0;
   int active_observations = 0;  // observations touching a free variable
   double final_lambda = 0.0;
+  // With BaOptions::compute_covariance, per camera of the problem (same index; empty otherwise):
+  // the covariance of the camera's right perturbation delta = (rho, phi) at the solution
+  // (T_w_c * expSE3(delta), delta in the camera frame; problem units^2 and rad^2), relative to
+  // the fixed cameras (the gauge). Zero and not valid for fixed cameras, and for every camera
+  // when S is not positive definite (no fixed camera, too few observations), when the inliers
+  // leave no degree of freedom, or when there are more than 100 free cameras.
+  std::vector<Eigen::Matrix<double, 6, 6>> camera_covariance;
+  std::vector<bool> camera_covariance_valid;
+  double residual_variance = 0.0;  // c of the covariance [px^2] (0 when not computed)
+  double covariance_ms = 0.0;      // its cost (not in time_ms)
 };
 
 BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options);

@@ -33,6 +33,11 @@ struct FrameResult {
   TrackingState state = TrackingState::kInitializing;
   bool pose_valid = false;         // T_w_c is meaningful (state == kTracking)
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // camera (optical) in world
+  // Covariance of T_w_c from the per-frame BA (optimization::BaSummary::camera_covariance): of
+  // the right perturbation delta = (rho, phi), T_w_c * expSE3(delta), in the camera frame, map
+  // units^2 and rad^2, relative to the fixed keyframes. Meaningful only when the flag is set.
+  Eigen::Matrix<double, 6, 6> T_w_c_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  bool T_w_c_covariance_valid = false;
   std::vector<FramePoint> points;  // tracked points of this frame
   std::size_t num_tracked = 0;     // 2D tracks alive
   std::size_t num_mapped = 0;      // tracks with a 3D position

@@ -15,6 +15,13 @@
 
 namespace vitamin_e::pipeline {
 
+struct FrameRefinement {
+  std::vector<std::uint64_t> removed;  // landmarks removed as outliers (their tracks must end)
+  // The frame's pose covariance (optimization::BaSummary::camera_covariance, right perturbation).
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  bool covariance_valid = false;
+};
+
 struct KeyframeUpdate {
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // the new keyframe's pose after the window BA
   int triangulated = 0;                 // new landmarks
@@ -26,8 +33,9 @@ class Mapper {
   Mapper(const SystemConfig& config, const camera::Camera& camera);
 
   // Per-frame BA: the frame's camera and the points it sees are free, the
-  // keyframes fixed. Updates *T_w_c and the points; returns the removed landmarks.
-  std::vector<std::uint64_t> refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
+  // keyframes fixed. Updates *T_w_c and the points; returns the removed
+  // landmarks and the pose's covariance.
+  FrameRefinement refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
   // Keyframe BA over the window (the newest keyframes free, the oldest fixed).
   std::vector<std::uint64_t> optimizeWindow(map::Map* map) const;
   bool needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const;
@@ -39,7 +47,7 @@ class Mapper {
   std::vector<std::uint64_t> penalize(const std::vector<std::uint64_t>& ids, map::Map* map) const;
 
  private:
-  std::vector<std::uint64_t> bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
+  FrameRefinement bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
   int triangulate(const FrameContext& frame, map::Map* map) const;
 
   SystemConfig config_;

@@ -11,6 +11,7 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
 #include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/Header.h>
@@ -33,9 +34,20 @@ Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& transform);
 // sets *error for any other encoding or a malformed message.
 bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error);
 
-// camera_info -> camera model (plumb_bob / rational_polynomial (first 5) /
-// equidistant / none). Throws camera::CalibrationError on bad values.
-vitamin_e::camera::Camera cameraFromInfo(const sensor_msgs::CameraInfo& info);
+// camera_info -> camera model of the image that comes with it. rectified: an
+// image_rect* stream, so P and no distortion; else K and D (plumb_bob,
+// rational_polynomial with k4 = k5 = k6 = 0, equidistant, none). Binning and ROI
+// (REP-104) scale and shift the intrinsics and give the image size. Throws
+// camera::CalibrationError naming what is wrong (bad values, a P without focal
+// length, non-zero rational k4..k6, an ROI outside the image).
+vitamin_e::camera::Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified = false);
+// True for a topic whose last name starts with image_rect (image_proc's names).
+bool isRectifiedTopic(const std::string& topic);
+
+// sensor_msgs/CompressedImage (jpeg or png, as compressed_image_transport writes
+// them) -> CV_8UC1, decoded with OpenCV; colour becomes gray, 16-bit is scaled by
+// 1/256. Returns false and sets *error otherwise.
+bool compressedToMono8(const sensor_msgs::CompressedImage& msg, cv::Mat* gray, std::string* error);
 // "none" | "radial-tangential" | "equidistant".
 std::string distortionName(vitamin_e::camera::DistortionModel model);
 

@@ -1,5 +1,6 @@
-// TrackingNodelet: FrameResult -> messages. Every pose and point is checked finite
-// before it is published (a non-finite one is skipped with a throttled error).
+// TrackingNodelet: FrameResult (already in the map frame) -> messages. Every pose and
+// point is checked finite before it is published (a non-finite one is skipped with a
+// throttled error).
 #include <cmath>
 
 #include <cv_bridge/cv_bridge.h>
@@ -25,20 +26,38 @@ void TrackingNodelet::publishResult(const FrameResult& result, const std_msgs::H
   vitamin_e::TrackingStatusPtr status(new vitamin_e::TrackingStatus);
   status->header = header;
   status->header.frame_id = frame_id_;
-  status->state = result.state == TrackingState::kTracking   ? vitamin_e::TrackingStatus::TRACKING
-                  : result.state == TrackingState::kLost     ? vitamin_e::TrackingStatus::LOST
-                                                             : vitamin_e::TrackingStatus::INITIALIZING;
+  status->state = result.state == TrackingState::kTracking       ? vitamin_e::TrackingStatus::TRACKING
+                  : result.state == TrackingState::kLost         ? vitamin_e::TrackingStatus::LOST
+                  : result.state == TrackingState::kRelocalizing ? vitamin_e::TrackingStatus::RELOCALIZING
+                                                                 : vitamin_e::TrackingStatus::INITIALIZING;
   status->state_name = vitamin_e::pipeline::toString(result.state);
   status->frame_index = result.frame_index;
   status->num_tracked = static_cast<uint32_t>(result.num_tracked);
   status->num_mapped = static_cast<uint32_t>(result.num_mapped);
   status->map_size = static_cast<uint32_t>(result.map_size);
-  status->init_retries = result.init_retries;
+  status->init_retries = finished_retries_ + result.init_retries;
+  status->relocalizations = finished_relocalizations_ + result.relocalizations;
   status->ms_per_frame = static_cast<float>(ms);
-  status->frames_processed = system_->framesProcessed();
-  status->frames_tracked = system_->framesTracked();
+  status->frames_processed = finished_processed_ + system_->framesProcessed();
+  status->frames_tracked = finished_tracked_ + system_->framesTracked();
+  status->segment = segment_;
   status->message = result.message;
   status_pub_.publish(status);
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.processed_wall.push_back(ros::WallTime::now().toSec());
+    ++stats_.processed;
+    stats_.state = status->state;
+    stats_.state_name = status->state_name;
+    stats_.message = result.message;
+    stats_.tracked = result.num_tracked;
+    stats_.mapped = result.num_mapped;
+    stats_.map_size = result.map_size;
+    stats_.init_retries = finished_retries_ + result.init_retries;
+    if (result.pose_valid) stats_.latency_s.push_back((ros::Time::now() - header.stamp).toSec());
+    while (stats_.latency_s.size() > 200) stats_.latency_s.pop_front();
+    while (stats_.processed_wall.size() > 2000) stats_.processed_wall.pop_front();
+  }
 
   if (result.pose_valid) {
     if (isFinite(result.T_w_c)) {
@@ -68,14 +87,42 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
   stamped->pose = pose;
   pose_pub_.publish(stamped);
 
+  // Odometry of ~base_frame when set (the camera's mounting from tf or the calibration), else
+  // of the camera. Covariance in ROS's convention (map-frame position, rotation about the map
+  // axes), from the per-frame BA; without one (the initialization frame) a large diagonal, not
+  // the zeros an EKF would read as certainty.
+  Eigen::Isometry3d T_map_child = result.T_w_c;
+  std::string child = frame_id_;
+  Eigen::Vector3d lever = Eigen::Vector3d::Zero();
+  if (!base_frame_.empty()) {
+    Eigen::Isometry3d T_c_base;
+    std::string why;
+    if (!cameraToBase(&T_c_base, &why)) {
+      NODELET_WARN_THROTTLE(5.0, "~odometry not published: %s", why.c_str());
+      publishPath(stamped);
+      return;
+    }
+    T_map_child = result.T_w_c * T_c_base;
+    child = base_frame_;
+    lever = result.T_w_c.linear() * T_c_base.translation();
+  }
   nav_msgs::OdometryPtr odom(new nav_msgs::Odometry);
   odom->header = stamped->header;
-  odom->child_frame_id = frame_id_;
-  odom->pose.pose = pose;
+  odom->child_frame_id = child;
+  odom->pose.pose = toPoseMsg(T_map_child);
+  Matrix6d cov = Matrix6d::Identity() * 1e3;
+  if (result.T_w_c_covariance_valid && result.T_w_c_covariance.allFinite()) {
+    cov = covarianceMovedTo(covarianceInParent(result.T_w_c_covariance, result.T_w_c.linear()), lever);
+  }
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) odom->pose.covariance[6 * r + c] = cov(r, c);
   odom->twist.covariance[0] = -1.0;  // twist not estimated
   odom_pub_.publish(odom);
+  publishPath(stamped);
+}
 
-  path_.header.stamp = header.stamp;
+void TrackingNodelet::publishPath(const geometry_msgs::PoseStampedConstPtr& stamped) {
+  path_.header.stamp = stamped->header.stamp;
   path_.poses.push_back(*stamped);
   if (dyn_.path_max_poses > 0 && path_.poses.size() > static_cast<std::size_t>(dyn_.path_max_poses)) {
     path_.poses.erase(path_.poses.begin(), path_.poses.end() - dyn_.path_max_poses);
@@ -83,11 +130,11 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
   if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
 }
 
-void TrackingNodelet::publishTf(const Eigen::Isometry3d& T_w_c, const ros::Time& stamp) {
+void TrackingNodelet::publishTf(const Eigen::Isometry3d& T_map_c, const ros::Time& stamp) {
   geometry_msgs::TransformStamped tf;
   tf.header.stamp = stamp;
   tf.header.frame_id = map_frame_;
-  if (tf_buffer_) {
+  if (!odom_frame_.empty() && !base_frame_.empty() && tf_buffer_) {
     // REP-105: map -> odom = T_map_cam * T_cam_odom, with cam -> base -> odom from tf.
     geometry_msgs::TransformStamped cam_odom;
     try {
@@ -97,16 +144,27 @@ void TrackingNodelet::publishTf(const Eigen::Isometry3d& T_w_c, const ros::Time&
                             frame_id_.c_str(), stamp.toSec(), e.what(), odom_frame_.c_str());
       return;
     }
-    const Eigen::Isometry3d T_map_odom = T_w_c * fromTransformMsg(cam_odom.transform);
+    const Eigen::Isometry3d T_map_odom = T_map_c * fromTransformMsg(cam_odom.transform);
     if (!isFinite(T_map_odom)) {
       NODELET_ERROR_THROTTLE(2.0, "non-finite map -> odom not published");
       return;
     }
     tf.child_frame_id = odom_frame_;
     tf.transform = toTransformMsg(T_map_odom);
+  } else if (!base_frame_.empty()) {
+    // The camera hangs under the base (its mounting is static): map -> base, so that the
+    // camera frame keeps one parent.
+    Eigen::Isometry3d T_c_base;
+    std::string why;
+    if (!cameraToBase(&T_c_base, &why)) {
+      NODELET_WARN_THROTTLE(5.0, "map -> %s not published: %s", base_frame_.c_str(), why.c_str());
+      return;
+    }
+    tf.child_frame_id = base_frame_;
+    tf.transform = toTransformMsg(T_map_c * T_c_base);
   } else {
     tf.child_frame_id = frame_id_;
-    tf.transform = toTransformMsg(T_w_c);
+    tf.transform = toTransformMsg(T_map_c);
   }
   tf_broadcaster_->sendTransform(tf);
 }
@@ -142,6 +200,7 @@ void TrackingNodelet::publishFrame(const FrameResult& result, const std_msgs::He
   frame->header.frame_id = map_frame_;
   frame->T_w_c = toPoseMsg(result.T_w_c);
   frame->frame_index = result.frame_index;
+  frame->segment = segment_;
   const auto& camera = system_->camera();
   frame->width = static_cast<uint32_t>(camera.width());
   frame->height = static_cast<uint32_t>(camera.height());
@@ -178,7 +237,7 @@ void TrackingNodelet::publishMapPoints(const ros::Time& stamp) {
   intensity.reserve(map.size());
   for (const auto& p : map) {
     if (!isFinite(p.p_w)) continue;
-    points.push_back(p.p_w.cast<float>());
+    points.push_back((T_map_w_ * p.p_w).cast<float>());
     intensity.push_back(p.intensity);
   }
   if (points.size() < map.size()) {

@@ -143,6 +143,15 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!config_ok_) return;
     if (map_frame_.empty()) map_frame_ = msg->header.frame_id.empty() ? "map" : msg->header.frame_id;
+    if (dense_ && msg->segment != segment_) {
+      // The tracker restarted (~reset, a stamp jumping back): a new map, so a new volume.
+      NODELET_INFO("tracking segment %u: a new map, the TSDF starts over (%zu frames fused before)", msg->segment,
+                   frames_integrated_);
+      dense_.reset();
+      frames_integrated_ = 0;
+      changed_ = true;
+    }
+    segment_ = msg->segment;
     try {
       K.validate();
       if (!dense_) {
@@ -222,6 +231,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   meshing::PinholeIntrinsics dense_K_;
   std::size_t frames_integrated_ = 0;
   std::size_t published_markers_ = 0;
+  unsigned segment_ = 0;  // the tracker's segment of the frames fused
   bool changed_ = false;
   ros::Subscriber frame_sub_;
   ros::Publisher mesh_pub_;
