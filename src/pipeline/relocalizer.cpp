@@ -115,7 +115,6 @@ std::vector<std::size_t> Relocalizer::spread(const FrameContext& frame, const st
 void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, const Eigen::Isometry3d& T_w_c) {
   if (!config_.enabled || image.empty()) return;
   Entry e;
-  e.serial = next_serial_++;
   e.frame_index = frame.frame_index;
   e.T_w_c = T_w_c;
   std::vector<bool> mapped(frame.tracks.size());
@@ -136,6 +135,8 @@ void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, c
     e.points.push_back(p);
   }
   if (e.points.size() < static_cast<std::size_t>(config_.min_inliers)) return;
+  // Serials only for entries kept: relocalize() finds an entry at serial - first serial.
+  e.serial = next_serial_++;
   hashEntry(e, true);
   entries_.push_back(std::move(e));
   while (static_cast<int>(entries_.size()) > config_.max_keyframes) {

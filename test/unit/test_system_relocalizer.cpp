@@ -184,6 +184,28 @@ TEST(Relocalizer, PrefersTheLandmarkPositionsOfTheMapOverItsOwnCopy) {
   expectNear(r.T_w_c, expected, 0.01, 0.2);
 }
 
+TEST(Relocalizer, AKeyframeRefusedForTooFewPointsDoesNotShiftTheVotesOfTheNextOnes) {
+  // Entries are found in the hash tables by serial number: a keyframe that is
+  // not indexed (no mapped point) must not use one, or the votes of every later
+  // keyframe go to its successor.
+  ve::map::Map map;
+  Relocalizer relocalizer(RelocalizerConfig{}, world().camera, pnpConfig());
+  indexKeyframe(cameraAt(0.0, 0.0, M_PI), 1, &map, &relocalizer);
+  const FrameContext unmapped = world().detect(world().render(cameraAt(0.0, 0.0, -M_PI / 2), 2), 2);
+  FrameContext no_points = unmapped;
+  no_points.lookup(map);
+  relocalizer.addKeyframe(no_points.image, no_points, cameraAt(0.0, 0.0, -M_PI / 2));
+  ASSERT_EQ(relocalizer.size(), 1u);
+  indexKeyframe(cameraAt(0.0, 0.0, 0.0), 3, &map, &relocalizer);
+  indexKeyframe(cameraAt(0.0, 0.0, M_PI / 2), 4, &map, &relocalizer);  // the newest: another wall
+  const Eigen::Isometry3d T_w_lost = cameraAt(0.2, -0.98, 0.17);
+  const FrameContext lost = world().detect(world().render(T_w_lost, 95), 5);
+  const Relocalization r = relocalizer.relocalize(lost.image, lost, map);
+  ASSERT_TRUE(r.ok) << r.why;
+  EXPECT_EQ(r.keyframe, 3u);
+  expectNear(r.T_w_c, T_w_lost, 0.01, 0.2);
+}
+
 TEST(Relocalizer, RejectsBadConfig) {
   RelocalizerConfig c;
   c.patch_size = 8;
