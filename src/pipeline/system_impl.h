@@ -45,6 +45,8 @@ struct System::Impl {
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
   void addTiming(const std::string& stage, double ms);
+  // A loss is not given up for a new map (system_map_io.cpp).
+  bool keepRelocalizing() const;
 
   SystemConfig config;
   camera::Camera camera;
@@ -63,6 +65,10 @@ struct System::Impl {
   std::size_t mapped_last_frame = 0;  // map points tracked in the last tracked frame (not counting reuse)
   double scene_depth = 1.0;           // median depth of the map seen from the camera, map units
   int lost_frames = 0;                // frames with features spent relocalizing since the loss
+  // map persistence (system_map_io.cpp)
+  bool localization_only = false;     // the map is not changed (System::setLocalizationOnly)
+  bool map_loaded = false;            // the map came from loadMap()
+  bool found_in_loaded_map = false;   // relocalized in it since (until then a loss is never given up)
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
   // both threads

@@ -255,6 +255,8 @@ void DenseTracker::reset() {
   impl_->sigma_state = 0.0;
 }
 
+void DenseTracker::reserveIdsBelow(std::uint64_t first_id) { impl_->next_id = std::max(impl_->next_id, first_id); }
+
 void DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
   if (ids.empty()) return;
   std::vector<std::uint64_t> sorted(ids);
