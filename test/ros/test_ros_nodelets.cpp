@@ -2,7 +2,8 @@
 //   Pipeline.*   (pipeline.test)    bag -> tracking + meshing nodelets in one manager
 //   TwoProcess.* (two_process.test) tracking_node and tsdf_meshing_node, two processes
 //   BadInput.*   (bad_input.test)   wrong encoding / size / stamp: errors logged, no crash
-//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~map_file written when the nodelet unloads
+//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~export_points / ~save_map written when the nodelet unloads
+//   MapFile.*    (map_file.test, test_ros_map_file.cpp) ~save_map / ~load_map / ~localization_only
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -29,6 +30,7 @@
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/eval/metrics.h"
 #include "vitamin_e/eval/trajectory.h"
+#include "vitamin_e/map/map_file.h"
 
 using vitamin_e_test::Watcher;
 using Statuses = std::vector<vitamin_e::TrackingStatus::ConstPtr>;
@@ -114,9 +116,13 @@ TEST(Pipeline, SavedTrajectoryAte) {
   save.request.path = out + "/pipeline_trajectory.txt";
   ASSERT_TRUE(ros::service::call("/tracking/save_trajectory", save));
   ASSERT_TRUE(save.response.success) << save.response.message;
-  save.request.path = out + "/pipeline_map.ply";
+  save.request.path = out + "/pipeline_points.ply";
+  ASSERT_TRUE(ros::service::call("/tracking/export_points", save));
+  EXPECT_TRUE(save.response.success) << save.response.message;
+  save.request.path = out + "/pipeline_map.vemap";
   ASSERT_TRUE(ros::service::call("/tracking/save_map", save));
   EXPECT_TRUE(save.response.success) << save.response.message;
+  EXPECT_NO_THROW(vitamin_e::map::loadMapFile(save.request.path));
   save.request.path = out + "/pipeline_mesh.ply";
   ASSERT_TRUE(ros::service::call("/tsdf_meshing/save_mesh", save));
   EXPECT_TRUE(save.response.success) << save.response.message;
@@ -263,7 +269,8 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
   }
 }
 
-// (d, issue 7) ~trajectory_file and ~map_file are written when the tracking
+// (d, issue 7) ~trajectory_file and ~map_file (the PLY export, now also
+// ~export_points) are written when the tracking
 // nodelet goes away, as on SIGINT of its manager: loaded in this process with a
 // nodelet::Loader, fed the test bag's images, then unloaded.
 TEST(ShutdownSave, TrajectoryAndMapWrittenOnUnload) {

@@ -38,6 +38,10 @@ void TrackingNodelet::publishResult(const FrameResult& result, const std_msgs::H
   status->frames_processed = system_->framesProcessed();
   status->frames_tracked = system_->framesTracked();
   status->message = result.message;
+  if (system_->mapLoaded()) {  // a map from ~load_map: say whether the camera is in it
+    const std::string where = result.pose_valid ? "localizing in loaded map" : "lost in loaded map";
+    status->message = result.message.empty() ? where : where + ": " + result.message;
+  }
   status_pub_.publish(status);
 
   if (result.pose_valid) {
