@@ -105,6 +105,8 @@ void Relocalizer::importEntries(const std::vector<map::IndexedKeyframe>& entries
     e.frame_index = k.frame_index;
     e.T_w_c = k.T_w_c;
     e.points.reserve(k.points.size());
+    e.descriptors.reserve(k.points.size());
+    e.polarities.reserve(k.points.size());
     for (const map::IndexedPoint& q : k.points) {
       Point p;
       p.landmark_id = q.landmark_id;
@@ -115,8 +117,29 @@ void Relocalizer::importEntries(const std::vector<map::IndexedKeyframe>& entries
       e.polarities.push_back(p.polarity);
       e.points.push_back(p);
     }
-    hashEntry(e, true);
     entries_.push_back(std::move(e));
+  }
+  // The hash tables in one pass per table: bucket sizes counted first, so that
+  // a large index is not built by hundreds of thousands of reallocations.
+  std::vector<std::uint32_t> keys;
+  std::vector<std::uint32_t> count(std::size_t{1} << kKeyBits);
+  for (int t = 0; t < kTables; ++t) {
+    keys.clear();
+    std::fill(count.begin(), count.end(), 0u);
+    for (const Entry& e : entries_) {
+      for (std::size_t i = 0; i < e.points.size(); ++i) {
+        keys.push_back(key(t, e.descriptors[i], e.polarities[i]));
+        ++count[keys.back()];
+      }
+    }
+    for (std::size_t b = 0; b < count.size(); ++b) buckets_[t][b].reserve(count[b]);
+    std::size_t next = 0;
+    for (const Entry& e : entries_) {
+      for (std::size_t i = 0; i < e.points.size(); ++i) {
+        std::vector<std::uint32_t>& bucket = buckets_[t][keys[next++]];
+        if (bucket.empty() || bucket.back() != e.serial) bucket.push_back(e.serial);
+      }
+    }
   }
 }
 
