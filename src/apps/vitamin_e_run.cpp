@@ -300,6 +300,8 @@ int run(const Options& o) {
   stats.dataset = o.dataset;
   stats.dataset_kind = dataset->kind();
   stats.config = o.config;
+  stats.loaded_map = o.load_map;
+  stats.localization_only = o.localization_only;
   Progress progress(end - o.start_frame, o.quiet);
   const auto t_start = std::chrono::steady_clock::now();
   std::size_t attempted = 0;

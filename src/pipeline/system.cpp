@@ -260,7 +260,6 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
     trajectory.back().T_w_c = T_w_c;
     relocalizer.addKeyframe(frame.image, frame, T_w_c);
   }
-  found_in_loaded_map = map_loaded;
   state = TrackingState::kTracking;
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
@@ -359,7 +358,6 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
 
 void System::Impl::reset() {
   map_loaded = false;
-  found_in_loaded_map = false;
   map.clear();
   relocalizer.clear();
   lost_frames = 0;

@@ -67,8 +67,7 @@ struct System::Impl {
   int lost_frames = 0;                // frames with features spent relocalizing since the loss
   // map persistence (system_map_io.cpp)
   bool localization_only = false;     // the map is not changed (System::setLocalizationOnly)
-  bool map_loaded = false;            // the map came from loadMap()
-  bool found_in_loaded_map = false;   // relocalized in it since (until then a loss is never given up)
+  bool map_loaded = false;            // the map came from loadMap() (a loss is then never given up)
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
   // both threads

@@ -35,7 +35,9 @@ void checkCamera(const camera::Camera& map_camera, const camera::Camera& camera)
 
 }  // namespace
 
-bool System::Impl::keepRelocalizing() const { return localization_only || (map_loaded && !found_in_loaded_map); }
+// A new map would discard the loaded one (and a later save would overwrite its
+// file with the new map): with a loaded map the camera is only ever looked for in it.
+bool System::Impl::keepRelocalizing() const { return localization_only || map_loaded; }
 
 map::MapFileContents System::exportMap() const {
   const Impl& s = *impl_;
@@ -102,7 +104,6 @@ void System::loadMap(const map::MapFileContents& c) {
   s.initialized_once = true;  // a later new map (extend mode, after a loss) starts at the last pose and scale
   s.state = TrackingState::kRelocalizing;
   s.map_loaded = true;
-  s.found_in_loaded_map = false;
 }
 
 bool System::saveMap(const std::string& path, std::string* error) const {

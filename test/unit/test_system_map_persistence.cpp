@@ -228,6 +228,38 @@ TEST(SystemMapPersistence, ExtendModeAddsKeyframesAndItsMapRoundTrips) {
   EXPECT_TRUE(a == b) << "sizes " << a.size() << " and " << b.size();
 }
 
+TEST(SystemMapPersistence, WithALoadedMapALossIsNeverGivenUpForANewMap) {
+  // Extend mode: found in the loaded map, then the camera turned at once to
+  // the room's other side, which the first run never saw, for more frames than
+  // relocalization.max_frames. No new map (it would discard the loaded one,
+  // and a later save would overwrite its file); back on the trip, found again.
+  const ve::map::MapFileContents loaded = ve::map::loadMapFile(firstRun().map_path);
+  const ve::pipeline::SystemConfig config = ve::test::halfResolutionConfig();
+  ve::pipeline::System system(config, world().camera);
+  system.loadMap(loaded);
+  const TripRun start = runFrames(&system, kSecondStart, 20, 50000);
+  expectAllLocalizedAfter(start, 0);
+  const int away = config.relocalization.max_frames + 10;
+  int lost = 0;
+  for (int i = 0; i < away; ++i) {
+    const int k = kSecondStart + 20 + i;
+    Eigen::Isometry3d T_w_c = cameraPose(k / kRate);
+    T_w_c.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix() * T_w_c.linear();
+    ve::synth::RenderOptions options;
+    options.noise_sigma = 1.0;
+    options.noise_seed = 50000 + static_cast<std::uint64_t>(k);
+    const ve::pipeline::FrameResult r = system.process(world().renderer->render(T_w_c, options), kT0 + k / kRate);
+    lost += r.pose_valid ? 0 : 1;
+  }
+  EXPECT_GE(lost, away - 2) << "the turned camera was not lost";
+  EXPECT_EQ(system.initRetries(), 0);
+  const TripRun back = runFrames(&system, kSecondStart + 20 + away, 40, 60000);
+  expectAllLocalizedAfter(back, 10);
+  EXPECT_EQ(system.initRetries(), 0);
+  EXPECT_EQ(system.firstInitFrame(), -1);
+  EXPECT_GE(system.relocalizations(), 2);
+}
+
 TEST(SystemMapPersistence, AMapFromAnotherCameraSizeIsRefusedByName) {
   const ve::map::MapFileContents loaded = ve::map::loadMapFile(firstRun().map_path);
   ve::pipeline::System system(ve::test::halfResolutionConfig(), ve::synth::makeSequenceCamera(752, 480, true));

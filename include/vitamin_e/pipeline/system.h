@@ -63,6 +63,8 @@ class System {
   // naming the problem (another camera, descriptors made with other
   // relocalization settings, relocalization off, an inconsistent map), and then
   // changes nothing. Without localization only, the loaded map is extended.
+  // With a loaded map a loss is never given up for a new map (that would
+  // discard the loaded one): the camera is looked for in it until found.
   map::MapFileContents exportMap() const;
   void loadMap(const map::MapFileContents& contents);
   // exportMap() written to a map file; false (and *error) when it cannot.
