@@ -4,6 +4,12 @@
 // scene's room and boxes) is projected (with distortion) into frame k; a track
 // step is an inlier when it lands within 1 px of that reprojection.
 //   bench_tracking_render RENDER_DIR [--start K] [--frames N] [--max-points N] [--threads N] [--per-frame 1]
+// --per-frame 1 prints per frame (stderr) the tracked/new counts, the frame's
+// curvature scale, median strength ratio and patch gain, the losses by check and
+// the steps' precision: run it on an exposure step (exposure.csv of the render)
+// with --start N --frames N. Most TrackerConfig fields have a switch (see the
+// option list below), e.g. --relative-strength 0 --floor-follows 0 --align-gain 0
+// for the tracker of before the exposure-step handling.
 // Track length is given three ways: over every track ever started (most new
 // extrema end at their first step, so this median is 1-2), over the tracks that
 // survived their first step, and as the median age of the tracked points of a
@@ -246,6 +252,12 @@ int main(int argc, char** argv) {
     else if (k == "--disagree") cfg.max_align_disagreement_px = std::stod(argv[i + 1]);
     else if (k == "--confirm-max-unaligned") cfg.confirm_max_unaligned_fraction = std::stod(argv[i + 1]);
     else if (k == "--klt") run_klt = std::stoi(argv[i + 1]);
+    else if (k == "--subpixel-strength") cfg.strength_at_subpixel_peak = std::stoi(argv[i + 1]);
+    else if (k == "--relative-strength") cfg.relative_strength_change = std::stoi(argv[i + 1]);
+    else if (k == "--ratio-min-change") cfg.strength_ratio_min_change = std::stod(argv[i + 1]);
+    else if (k == "--floor-follows") cfg.floor_follows_exposure = std::stoi(argv[i + 1]);
+    else if (k == "--align-gain-min") cfg.align_gain_min_change = std::stod(argv[i + 1]);
+    else if (k == "--align-gain") cfg.align_gain = std::stoi(argv[i + 1]);
     else { std::fprintf(stderr, "unknown option %s\n", k.c_str()); return 2; }
   }
   LensModel cam;
@@ -290,8 +302,9 @@ int main(int argc, char** argv) {
       min_tracked = std::min(min_tracked, tf.num_tracked);
       for (const auto& kv : tf.lost_by) lost_by[kv.first] += kv.second;
       if (per_frame) {
-        std::fprintf(stderr, "FRAME %zu tracked %d new %d flow_ok %d matches %d b %.1f %.1f sigma %.2f:", k, tf.num_tracked, tf.num_new,
-                     tf.flow_ok, tf.flow_matches, tf.b.x(), tf.b.y(), tf.smoothing_sigma);
+        std::fprintf(stderr, "FRAME %zu tracked %d new %d flow_ok %d matches %d b %.1f %.1f sigma %.2f scale %.3g ratio %.3f gain %.3f:",
+                     k, tf.num_tracked, tf.num_new, tf.flow_ok, tf.flow_matches, tf.b.x(), tf.b.y(), tf.smoothing_sigma,
+                     tf.curvature_scale, tf.strength_ratio, tf.patch_gain);
         for (const auto& kv : tf.lost_by) std::fprintf(stderr, " %s %d", kv.first.c_str(), kv.second);
         std::fprintf(stderr, "\n");
       }
@@ -304,6 +317,8 @@ int main(int argc, char** argv) {
       if (!ages.empty()) live_age.push_back(median(ages));
     }
     spawned += tf.num_new;
+    long frame_checked = 0, frame_inliers = 0;
+    std::vector<double> frame_err;
     std::unordered_map<std::uint64_t, Eigen::Vector2f> cur;
     for (const auto& p : tf.points) {
       cur[p.id] = p.uv;
@@ -325,9 +340,16 @@ int main(int argc, char** argv) {
       Eigen::Vector2d truth;
       if (!reproject(cam, scene, frames[k - 1], frames[k], it->second.cast<double>(), &truth)) continue;
       ++ours.checked;
+      ++frame_checked;
       const double e = (p.uv.cast<double>() - truth).norm();
-      if (e <= 1.0) ++ours.inliers;
+      if (e <= 1.0) ++ours.inliers, ++frame_inliers;
+      frame_err.push_back(e);
       ++hist[e < 0.25 ? 0 : e < 0.5 ? 1 : e < 1.0 ? 2 : e < 2.0 ? 3 : 4];
+    }
+    if (per_frame && k > 0) {
+      std::fprintf(stderr, "  steps checked %ld within 1 px %.4f median error %.3f px\n", frame_checked,
+                   frame_checked ? static_cast<double>(frame_inliers) / frame_checked : 0.0,
+                   frame_err.empty() ? 0.0 : median(frame_err));
     }
     prev.swap(cur);
   }

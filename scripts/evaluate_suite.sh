@@ -2,7 +2,9 @@
 # Runs vitamin_e on a list of sequences and prints the paper's table (Markdown).
 #   ./scripts/evaluate_suite.sh LIST [--out DIR] [--runs-only] [-- run_dataset.sh flags...]
 # LIST: one sequence per line, `NAME DATASET_PATH [GROUNDTRUTH [SENSOR_YAML]]` ('#'
-# comments). GROUNDTRUTH defaults to DATASET_PATH/groundtruth_cam0_tum.txt, else
+# comments; relative paths are taken from the repository's root, so
+# config/suites/real.txt names ../shared/...: VE_SHARED=DIR puts it elsewhere). GROUNDTRUTH defaults to
+# DATASET_PATH/groundtruth_cam0_tum.txt, else DATASET_PATH/poses.txt (KITTI), else
 # the dataset's EuRoC ground truth (body pose, turned into the camera's with the
 # dataset's own sensor.yaml). SENSOR_YAML: GROUNDTRUTH is a body pose, camera =
 # body * T_BS of that file (e.g. the shared EuRoC TUM ground truth files).
@@ -10,7 +12,8 @@
 # trajectory.txt and stats.json), then `./scripts/evaluate.sh` (Sim(3) ATE).
 # OUT defaults to out/suite. The table also goes to OUT/results.md.
 # Columns: success = tracked / all frames (the paper's); after init = tracked /
-# frames from the first initialization on; peak RSS of the whole run.
+# frames from the first initialization on; init retries = new maps after a loss;
+# relocalizations = losses recovered in the existing map; peak RSS of the whole run.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -62,8 +65,20 @@ while read -r name dataset gt sensor rest; do
   [ -z "${name:-}" ] && continue
   case "$name" in \#*) continue ;; esac
   [ -n "${dataset:-}" ] || ve_die "$list: line for '$name' has no DATASET_PATH"
+  abs() {
+    case "$1" in
+      /*|"") echo "$1" ;;
+      ../shared/*) echo "${VE_SHARED:-$VE_ROOT/../shared}/${1#../shared/}" ;;
+      *) echo "$VE_ROOT/$1" ;;
+    esac
+  }
+  dataset="$(abs "$dataset")"
+  gt="$(abs "${gt:-}")"
+  sensor="$(abs "${sensor:-}")"
   if [ -z "${gt:-}" ] && [ -f "$dataset/groundtruth_cam0_tum.txt" ]; then
     gt="$dataset/groundtruth_cam0_tum.txt"
+  elif [ -z "${gt:-}" ] && [ -f "$dataset/poses.txt" ]; then
+    gt="$dataset/poses.txt"
   elif [ -z "${gt:-}" ] && [ -f "$dataset/mav0/state_groundtruth_estimate0/data.csv" ]; then
     gt="$dataset/mav0/state_groundtruth_estimate0/data.csv"
   fi
@@ -74,6 +89,7 @@ while read -r name dataset gt sensor rest; do
   "$VE_ROOT/scripts/run_dataset.sh" "$dataset" "$run" "${run_flags[@]}" >"$run/run.log" 2>&1 </dev/null || run_rc=$?
   frames="$(json_get "$run/stats.json" frames)"
   retries="$(json_get "$run/stats.json" init_retries)"
+  relocs="$(json_get "$run/stats.json" relocalizations)"
   ms="$(json_get "$run/stats.json" timing_ms.total.mean)"
   stats_success="$(json_get "$run/stats.json" success_rate)"
   after_init="$(json_get "$run/stats.json" success_after_init)"
@@ -96,18 +112,18 @@ while read -r name dataset gt sensor rest; do
       note="evaluation failed: $(tail -n 1 "$run/evaluate.err")"
     fi
   fi
-  ve_info "   ATE $(fmt "$ate" 100 2) cm, success $(fmt "$success" 100 1) %, retries ${retries:-n/a}, $(fmt "$ms" 1 1) ms/frame ${note}"
+  ve_info "   ATE $(fmt "$ate" 100 2) cm, success $(fmt "$success" 100 1) %, retries ${retries:-n/a}, relocalizations ${relocs:-n/a}, $(fmt "$ms" 1 1) ms/frame ${note}"
   ate_cell="$(fmt "$ate" 100 2)"
   [ -n "$note" ] && ate_cell="n/a ($note)"
   # The paper counts a run under 90 % of frames tracked as a failure.
   if [ -z "$note" ] && [ -n "$success" ] && "$py" -c 'import sys; sys.exit(0 if float(sys.argv[1]) < 0.9 else 1)' "$success"; then
     ate_cell="fail ($ate_cell cm over $(fmt "$success" 100 1) % of frames)"
   fi
-  rows+=("| $name | ${frames:-n/a} | $ate_cell | $(fmt "$success" 100 1) | $(fmt "$after_init" 100 1) | ${retries:-n/a} | $(fmt "$ms" 1 1) | $(fmt "$rss" 1 0) |")
+  rows+=("| $name | ${frames:-n/a} | $ate_cell | $(fmt "$success" 100 1) | $(fmt "$after_init" 100 1) | ${retries:-n/a} | ${relocs:-n/a} | $(fmt "$ms" 1 1) | $(fmt "$rss" 1 0) |")
 done <"$list"
 
 {
-  echo "| sequence | frames | ATE [cm] | success [%] | after init [%] | init retries | ms/frame | peak RSS [MB] |"
-  echo "|---|---|---|---|---|---|---|---|"
+  echo "| sequence | frames | ATE [cm] | success [%] | after init [%] | init retries | relocalizations | ms/frame | peak RSS [MB] |"
+  echo "|---|---|---|---|---|---|---|---|---|"
   for r in "${rows[@]}"; do echo "$r"; done
 } | tee "$out/results.md"

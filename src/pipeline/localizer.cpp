@@ -2,7 +2,8 @@
 
 namespace vitamin_e::pipeline {
 
-Localizer::Localizer(const SystemConfig& config) : pnp_(config.pnp), min_inliers_(config.min_pose_inliers) {}
+Localizer::Localizer(const SystemConfig& config)
+    : pnp_(config.pnp), min_inliers_(config.min_pose_inliers), min_inlier_ratio_(config.min_pose_inlier_ratio) {}
 
 PoseEstimate Localizer::estimate(const FrameContext& frame, const Eigen::Isometry3d& guess) const {
   std::vector<Eigen::Vector3d> p_w;
@@ -46,6 +47,13 @@ PoseEstimate Localizer::solve(const std::vector<Eigen::Vector3d>& p_w, const std
   if (!r.ok || r.num_inliers < min_inliers_) {
     e.why = "pose estimation failed (" + std::to_string(r.num_inliers) + " inliers of " + std::to_string(p_w.size()) +
             ")";
+    return e;
+  }
+  // Tracks that survived a sudden change are often wrong: a pose only a minority
+  // of the tracked map points agree with is not trusted.
+  if (r.num_inliers < min_inlier_ratio_ * static_cast<double>(p_w.size())) {
+    e.why = "weak pose: only " + std::to_string(r.num_inliers) + " of " + std::to_string(p_w.size()) +
+            " tracked map points agree";
     return e;
   }
   for (std::size_t i = 0; i < ids.size(); ++i) {

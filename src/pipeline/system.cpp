@@ -171,7 +171,6 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   motion.restart(T_w_c, T_prev_cur);
   initialized_once = true;
   frame.lookup(map);
-  mapped_last_frame = frame.numMapped();
   relocalizer.addKeyframe(frame.image, frame, T_w_c);
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
@@ -202,7 +201,6 @@ void System::Impl::reinitialize(const std::string& why, FrameResult* result) {
   ++counters.init_retries;
   map.clear();
   relocalizer.clear();  // the new map has its own scale: the old keyframes do not fit it
-  mapped_last_frame = 0;
   initializer.reset();
   state = TrackingState::kLost;
   result->message = "lost: " + why + "; re-initializing";
@@ -237,13 +235,13 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
 // the frame becomes a keyframe so that new points are triangulated from it.
 bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result) {
   frame.lookup(map);
-  std::size_t reused = static_cast<std::size_t>(reuse.associate(frame, T_w_guess, scene_depth, &map, true));
+  reuse.associate(frame, T_w_guess, scene_depth, &map, true);
   frame.lookup(map);
   const PoseEstimate pose = localizer.estimate(frame, T_w_guess);
   if (!pose.ok) return false;
   endTracks(mapper.penalize(pose.outliers, &map), frame);
   Eigen::Isometry3d T_w_c = pose.T_w_c;
-  reused += static_cast<std::size_t>(reuse.associate(frame, T_w_c, scene_depth, &map, true));
+  reuse.associate(frame, T_w_c, scene_depth, &map, true);
   frame.lookup(map);
   endTracks(mapper.refineFrame(frame, &T_w_c, &map), frame);
   if (!T_w_c.matrix().allFinite()) return false;
@@ -264,33 +262,21 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_c;
-  mapped_last_frame = frame.numMapped();
-  mapped_last_frame -= std::min(mapped_last_frame, reused);
   return true;
 }
 
 void System::Impl::track(FrameContext& frame, FrameResult* result) {
   frame.lookup(map);
-  // Most map points of the previous frame gone at once (a cut, a sudden flip, a
-  // covered lens): the few tracks left are not trusted for a pose.
-  const std::size_t seen_before = mapped_last_frame;
-  const std::size_t seen_now = frame.numMapped();
-  const bool vanished = seen_before >= 100 && seen_now * 5 < seen_before;
   for (const map::Landmark* l : frame.landmarks) {
     if (l) map.markSeen(l->id, frame.frame_index);
   }
-  std::size_t reused = 0;
   Eigen::Isometry3d T_w_c;
   {
     const auto t0 = std::chrono::steady_clock::now();
-    PoseEstimate pose;
-    if (vanished) {
-      pose.why = "only " + std::to_string(seen_now) + " of the " + std::to_string(seen_before) +
-                 " map points of the previous frame are still tracked";
-    } else {
-      pose = localizer.estimate(frame, motion.predict());
-      if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
-    }
+    // Accepted only when well constrained (enough inliers, and most of the
+    // tracked map points agree): however many tracks a turn or a cut ended.
+    const PoseEstimate pose = localizer.estimate(frame, motion.predict());
+    if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
     const double ms = elapsedMs(t0);
     addTiming("pose", ms);
     result->timing_ms["pose"] = ms;
@@ -301,8 +287,7 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
     // Localized: new tracks where old map points project take them over.
     const auto t1 = std::chrono::steady_clock::now();
     T_w_c = pose.T_w_c;
-    reused = static_cast<std::size_t>(reuse.associate(frame, T_w_c, scene_depth, &map));
-    if (reused > 0) frame.lookup(map);
+    if (reuse.associate(frame, T_w_c, scene_depth, &map) > 0) frame.lookup(map);
     const double reuse_ms = elapsedMs(t1);
     addTiming("reuse", reuse_ms);
     result->timing_ms["reuse"] = reuse_ms;
@@ -349,11 +334,6 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_c;
-  // Map points handed to tracks by map reuse this frame are left out: they are
-  // mostly on tracks born a frame ago, half of which end at their next step, so
-  // counting them would make ordinary churn look like the map vanishing.
-  mapped_last_frame = frame.numMapped();
-  mapped_last_frame -= std::min(mapped_last_frame, reused);
 }
 
 void System::Impl::reset() {
@@ -361,7 +341,6 @@ void System::Impl::reset() {
   map.clear();
   relocalizer.clear();
   lost_frames = 0;
-  mapped_last_frame = 0;
   initializer.reset();
   state = TrackingState::kInitializing;
   front_end.reset();

@@ -86,9 +86,14 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("tracker", "min_track_curvature", &t.min_track_curvature));
   f.push_back(field("tracker", "noise_reference", &t.noise_reference));
   f.push_back(field("tracker", "min_track_sharpness", &t.min_track_sharpness));
+  f.push_back(field("tracker", "relative_strength_change", &t.relative_strength_change));
+  f.push_back(field("tracker", "strength_ratio_min_change", &t.strength_ratio_min_change));
+  f.push_back(field("tracker", "floor_follows_exposure", &t.floor_follows_exposure));
   f.push_back(field("tracker", "strength_at_subpixel_peak", &t.strength_at_subpixel_peak));
   f.push_back(field("tracker", "extremum_weight", &t.extremum_weight));
   f.push_back(field("tracker", "align_radius_px", &t.align_radius_px));
+  f.push_back(field("tracker", "align_gain", &t.align_gain));
+  f.push_back(field("tracker", "align_gain_min_change", &t.align_gain_min_change));
   f.push_back(field("tracker", "max_align_disagreement_px", &t.max_align_disagreement_px));
   f.push_back(field("tracker", "confirm_max_unaligned_fraction", &t.confirm_max_unaligned_fraction));
   f.push_back(field("tracker", "threads", &t.threads));
@@ -143,6 +148,7 @@ std::vector<Field> fields(SystemConfig& c) {
   f.push_back(field("pipeline", "init_min_disparity_px", &c.init_min_disparity_px));
   f.push_back(field("pipeline", "init_max_pending_frames", &c.init_max_pending_frames));
   f.push_back(field("pipeline", "min_pose_inliers", &c.min_pose_inliers));
+  f.push_back(field("pipeline", "min_pose_inlier_ratio", &c.min_pose_inlier_ratio));
   f.push_back(field("pipeline", "max_outlier_count", &c.max_outlier_count));
   f.push_back(field("pipeline", "max_reprojection_px", &c.max_reprojection_px));
   f.push_back(field("pipeline", "ba_fixed_keyframes", &c.ba_fixed_keyframes));
@@ -287,6 +293,7 @@ void SystemConfig::validate() const {
   check(init_min_disparity_px >= 0.0, "pipeline.init_min_disparity_px must be >= 0");
   check(init_max_pending_frames >= 2, "pipeline.init_max_pending_frames must be >= 2");
   check(min_pose_inliers >= 6, "pipeline.min_pose_inliers must be >= 6");
+  check(min_pose_inlier_ratio >= 0.0 && min_pose_inlier_ratio <= 1.0, "pipeline.min_pose_inlier_ratio must be in [0, 1]");
   check(max_outlier_count >= 1, "pipeline.max_outlier_count must be >= 1");
   check(max_reprojection_px > 0.0, "pipeline.max_reprojection_px must be > 0");
   check(ba_fixed_keyframes >= 1 && ba_fixed_keyframes < map.max_keyframes,

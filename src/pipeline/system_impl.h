@@ -62,7 +62,6 @@ struct System::Impl {
   MotionModel motion;
   TrackingState state = TrackingState::kInitializing;
   bool initialized_once = false;
-  std::size_t mapped_last_frame = 0;  // map points tracked in the last tracked frame (not counting reuse)
   double scene_depth = 1.0;           // median depth of the map seen from the camera, map units
   int lost_frames = 0;                // frames with features spent relocalizing since the loss
   // map persistence (system_map_io.cpp)

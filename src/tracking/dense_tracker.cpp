@@ -26,6 +26,7 @@ struct Track {
   int age = 0;
   float sign = 1.f;
   float strength = 0.f;  // normalized |kappa| at the last position
+  float birth_exposure = 0.f;  // Impl::exposure_log when the track was detected
   Eigen::Vector2f resid = Eigen::Vector2f::Zero();  // last motion minus the dominant flow (parallax)
 };
 
@@ -36,9 +37,11 @@ struct Step {
   Eigen::Vector2f pred; // flow prediction x_bar
   Eigen::Vector2f patch;  // the previous position carried over by patch alignment (if aligned)
   bool aligned = false;
+  float gain = 1.f;     // contrast gain fitted by that alignment
   Eigen::Vector2i px;
   float kappa = 0.f;
   float peak = 0.f;     // sign*kappa of the sub-pixel peak
+  bool climbed = false; // the forward climb reached a maximum (peak is valid)
   bool ok = false;
   int fail = 0;  // LossReason of a failed step (kLossOk when ok)
 };
@@ -48,6 +51,10 @@ enum LossReason : int {
   kLossOk = 0, kLossClimb, kLossWeak, kLossStrengthChange, kLossFlat, kLossBackClimb, kLossForwardBackward,
   kLossUnconfirmed, kLossDuplicate, kLossReasons
 };
+// An absolute floor that follows the exposure (floor_follows_exposure) drops by
+// at most this factor: a darker change than that (a covered lens) ends tracks.
+constexpr float kMaxFloorDrop = 16.f;
+
 const char* const kLossNames[kLossReasons] = {"ok", "climb", "weak", "strength_change", "flat", "back_climb",
                                               "forward_backward", "unconfirmed", "duplicate"};
 
@@ -72,10 +79,16 @@ struct DenseTracker::Impl {
   std::vector<int> cell_count, cell_slots;
   std::vector<float> scratch;
   double sigma_state = 0.0;  // smoothed adaptive sigma (0 = not yet set)
+  float strength_ratio = 1.f;  // this frame's median new/old strength of the climbed tracks
+  float exposure_log = 0.f;    // sum over frames of log(median raw peak ratio): log of the contrast change cubed
+  float exposure_step = 0.f;   // this frame's part of it (set by trackAll)
+  float patch_gain = 1.f;      // this frame's median contrast gain of the patch alignment
+  std::vector<float> ratios;   // scratch of frameStrengthRatio / alignSteps
 
   explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
 
   void trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale);
+  float frameStrengthRatio(float scale);
   int detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh);
   void alignSteps();
 };
@@ -88,18 +101,19 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
   const Eigen::Matrix2f Ainv = Ainv_d.cast<float>();
   const float sigma2 = static_cast<float>(cfg.track_sigma_px * cfg.track_sigma_px);
   const float fb2 = static_cast<float>(cfg.fb_threshold_px * cfg.fb_threshold_px);
-  const float min_k = std::max(static_cast<float>(cfg.min_track_curvature) * scale,
-                               static_cast<float>(cfg.min_abs_curvature));
   const float inv_scale = 1.f / scale;
   const float max_ratio = static_cast<float>(cfg.max_curvature_ratio);
   const float blend = static_cast<float>(cfg.prediction_blend);
   const float min_sharp = static_cast<float>(cfg.min_track_sharpness);
+  const int stripes = cfg.threads > 1 ? cfg.threads * 4 : 1;
   steps.resize(tracks.size());
-  auto work = [&](int i0, int i1) {
+  // Forward: climb F from the flow prediction to a local maximum.
+  auto climb = [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
       const Track& t = tracks[i];
       Step& s = steps[i];
       s.ok = false;
+      s.climbed = false;
       s.fail = kLossClimb;
       ClimbParams fwd{t.sign, static_cast<float>(cfg.lambda) * scale, sigma2, cfg.max_climb_steps, 2};
       const Eigen::Vector2f r = cfg.predict_parallax ? t.resid : Eigen::Vector2f::Zero();
@@ -116,14 +130,56 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.uv = refineSubpixel(kappa, s.px, t.sign, &peak);
       if (!cfg.strength_at_subpixel_peak) peak = t.sign * s.kappa;
       s.peak = peak;
+      s.climbed = true;
+    }
+  };
+  forStripes(static_cast<int>(tracks.size()), stripes, 257, climb);
+  // The frame's strength change: an exposure step scales every peak alike (by
+  // about the cube of the brightness ratio: kappa is cubic in intensity), which
+  // the noise-dominated median |kappa| does not follow; each track is then
+  // judged against that common change, not against 1.
+  strength_ratio = frameStrengthRatio(scale);
+  // Ordinary frames scatter by a few % about 1 (motion, blur): there the test
+  // stays against 1, as before; it moves only on a real step.
+  const float test_ratio =
+      std::fabs(std::log(strength_ratio)) > std::log1p(static_cast<float>(cfg.strength_ratio_min_change))
+          ? strength_ratio
+          : 1.f;
+  // The single tracks scatter more about that change when it is large (the
+  // exposure time, hence the motion blur, changes with it, and so do the noise
+  // share and the saturation): the band widens by the change itself, by at most
+  // max_ratio again (a change beyond that is no exposure step).
+  const float widen = std::min(std::max(test_ratio, 1.f / test_ratio), max_ratio);
+  const float ratio_lo = test_ratio / (max_ratio * widen), ratio_hi = test_ratio * max_ratio * widen;
+  // The frame's raw curvature change (~ contrast gain cubed) accumulates into
+  // exposure_log; the absolute floor of a track follows it since the track's
+  // birth (see floor_follows_exposure).
+  const float raw_ratio = strength_ratio * scale / prev_scale;
+  const float exposure_now =
+      exposure_log + (std::isfinite(raw_ratio) && raw_ratio > 0.f ? std::log(raw_ratio) : 0.f);
+  const float min_rel = static_cast<float>(cfg.min_track_curvature) * scale;
+  const float floor_abs = static_cast<float>(cfg.min_abs_curvature);
+  const float floor_min_log = -std::log(kMaxFloorDrop);
+  exposure_step = exposure_now - exposure_log;
+  auto check = [&](int i0, int i1) {
+    for (int i = i0; i < i1; ++i) {
+      const Track& t = tracks[i];
+      Step& s = steps[i];
+      if (!s.climbed) continue;
+      const float peak = s.peak;
       s.fail = kLossWeak;
-      if (peak < min_k) continue;
+      float floor_k = floor_abs;
+      if (cfg.floor_follows_exposure && peak < floor_abs) {  // the factor is <= 1
+        floor_k *= std::exp(std::clamp(exposure_now - t.birth_exposure, floor_min_log, 0.f));
+      }
+      if (peak < std::max(min_rel, floor_k)) continue;
       const float strength = peak * inv_scale;
       s.fail = kLossStrengthChange;
-      if (strength > t.strength * max_ratio || strength * max_ratio < t.strength) continue;
+      if (strength > t.strength * ratio_hi || strength < t.strength * ratio_lo) continue;
       s.fail = kLossFlat;
       if (min_sharp > 0.f && peakSharpness(kappa, s.px, t.sign) < min_sharp) continue;
       // Backward: climb the previous curvature from the inverse prediction.
+      const Eigen::Vector2f r = cfg.predict_parallax ? t.resid : Eigen::Vector2f::Zero();
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
       Eigen::Vector2i q;
       s.fail = kLossBackClimb;
@@ -136,10 +192,26 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.ok = (qs - t.uv).squaredNorm() <= fb2;
       s.fail = s.ok ? kLossOk : kLossForwardBackward;
       s.ext = s.uv;
-      if (s.ok && blend > 0.f && (pred - s.uv).squaredNorm() < 1.f) s.uv += blend * (pred - s.uv);
+      if (s.ok && blend > 0.f && (s.pred - s.uv).squaredNorm() < 1.f) s.uv += blend * (s.pred - s.uv);
     }
   };
-  forStripes(static_cast<int>(tracks.size()), cfg.threads > 1 ? cfg.threads * 4 : 1, 257, work);
+  forStripes(static_cast<int>(tracks.size()), stripes, 257, check);
+}
+
+float DenseTracker::Impl::frameStrengthRatio(float scale) {
+  if (!cfg.relative_strength_change) return 1.f;
+  ratios.clear();
+  const float inv_scale = 1.f / scale;
+  for (size_t i = 0; i < tracks.size(); ++i) {
+    const Step& s = steps[i];
+    if (!s.climbed || !(s.peak > 0.f) || !(tracks[i].strength > 0.f)) continue;
+    ratios.push_back(s.peak * inv_scale / tracks[i].strength);
+  }
+  // Too few climbed tracks for a robust median: no common change assumed.
+  if (ratios.size() < 30) return 1.f;
+  auto mid = ratios.begin() + static_cast<long>(ratios.size() / 2);
+  std::nth_element(ratios.begin(), mid, ratios.end());
+  return std::isfinite(*mid) && *mid > 0.f ? *mid : 1.f;
 }
 
 void DenseTracker::Impl::alignSteps() {
@@ -148,21 +220,34 @@ void DenseTracker::Impl::alignSteps() {
   // not from the climbed extremum, so that it is an independent witness of where
   // the point went; as a filter alone it starts from the extremum (it converges
   // more often from there). It may move up to 1.5 px from its start.
-  const PatchAlignParams ap{cfg.align_radius_px, cfg.align_iterations, 1.5f};
+  // On a frame whose contrast changed (exposure_step = log of the median raw
+  // peak ratio ~ 3 log(gain)) it fits a contrast gain per patch too: an
+  // unmodelled gain biases the shift. Elsewhere the mean alone (a gain fit there
+  // only adds noise).
+  const bool fit_gain =
+      cfg.align_gain && std::fabs(exposure_step) > 3.f * std::log1p(static_cast<float>(cfg.align_gain_min_change));
+  const PatchAlignParams ap{cfg.align_radius_px, cfg.align_iterations, 1.5f, fit_gain};
   const bool from_prediction = cfg.max_align_disagreement_px > 0.0;
   auto work = [&](int i0, int i1) {
     for (int i = i0; i < i1; ++i) {
       Step& s = steps[i];
       if (!s.ok) continue;
       s.patch = from_prediction ? s.pred : s.ext;
-      s.aligned = alignPatch(prev_smooth, smooth, tracks[i].uv, ap, &s.patch);
+      s.aligned = alignPatch(prev_smooth, smooth, tracks[i].uv, ap, &s.patch, &s.gain);
     }
   };
   forStripes(static_cast<int>(tracks.size()), cfg.threads > 1 ? cfg.threads * 4 : 1, 257, work);
   int candidates = 0, unaligned = 0;
+  ratios.clear();
   for (const Step& s : steps) {
     candidates += s.ok;
     unaligned += s.ok && !s.aligned;
+    if (s.ok && s.aligned) ratios.push_back(s.gain);
+  }
+  if (!ratios.empty()) {
+    auto mid = ratios.begin() + static_cast<long>(ratios.size() / 2);
+    std::nth_element(ratios.begin(), mid, ratios.end());
+    patch_gain = *mid;
   }
   // Confirmation: the extremum must lie within max_align_disagreement_px of the
   // patch's answer. Suspended on frames where the patch itself fails too often
@@ -232,6 +317,7 @@ int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Tra
     if (!cfg.strength_at_subpixel_peak) peak = std::fabs(e.kappa);
     t.age = 0;
     t.strength = peak / scale;
+    t.birth_exposure = exposure_log;
     fresh->push_back(t);
   }
   return static_cast<int>(fresh->size());
@@ -253,6 +339,7 @@ void DenseTracker::reset() {
   impl_->prev_small = SmallFeatures{};
   impl_->prev_smooth.release();
   impl_->sigma_state = 0.0;
+  impl_->exposure_log = 0.f;
 }
 
 void DenseTracker::reserveIdsBelow(std::uint64_t first_id) { impl_->next_id = std::max(impl_->next_id, first_id); }
@@ -337,6 +424,9 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
     m.owner = cv::Mat::zeros(gray.size(), CV_32SC1);
     m.blocked = cv::Mat::zeros(gray.size(), CV_8UC1);
   }
+  m.strength_ratio = 1.f;
+  m.patch_gain = 1.f;
+  m.exposure_step = 0.f;
   if (m.has_prev && !m.tracks.empty() && scale > 0.f) {
     m.trackAll(A, b, scale);
     if (cfg.refine_flow) {
@@ -402,6 +492,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       if (young[k] > 0) out.lost_new_by[kLossNames[k]] = young[k];
     }
   }
+  m.exposure_log += m.exposure_step;
+  out.curvature_scale = scale;
+  out.strength_ratio = m.strength_ratio;
+  out.patch_gain = m.patch_gain;
   out.num_lost = static_cast<int>(m.tracks.size() - m.next_tracks.size());
   out.num_tracked = static_cast<int>(m.next_tracks.size());
   out.timing_ms["track"] = msSince(t);

@@ -1,5 +1,6 @@
 #include "vitamin_e/tracking/patch_align.h"
 
+#include <Eigen/Dense>
 #include <cmath>
 
 namespace vitamin_e::tracking {
@@ -27,7 +28,7 @@ bool sampleGrid(const cv::Mat& img, float x0, float y0, int n, float* out) {
 }  // namespace
 
 bool alignPatch(const cv::Mat& prev, const cv::Mat& cur, const Eigen::Vector2f& p0, const PatchAlignParams& params,
-                Eigen::Vector2f* p) {
+                Eigen::Vector2f* p, float* gain) {
   const int r = params.radius;
   if (r < 1 || r > kMaxRadius || params.iterations < 1) return false;
   if (prev.type() != CV_32FC1 || cur.type() != CV_32FC1) return false;
@@ -53,40 +54,70 @@ bool alignPatch(const cv::Mat& prev, const cv::Mat& cur, const Eigen::Vector2f& 
   mt /= N;
   mgx /= N;
   mgy /= N;
-  float hxx = 0, hxy = 0, hyy = 0;
+  float hxx = 0, hxy = 0, hyy = 0, stt = 0, stx = 0, sty = 0;
   for (int k = 0; k < N; ++k) {
+    T[k] -= mt;
     gx[k] -= mgx;
     gy[k] -= mgy;
     hxx += gx[k] * gx[k];
     hxy += gx[k] * gy[k];
     hyy += gy[k] * gy[k];
+    stt += T[k] * T[k];
+    stx += T[k] * gx[k];
+    sty += T[k] * gy[k];
   }
   const float det = hxx * hyy - hxy * hxy;
   const float tr = hxx + hyy;
   if (!(det > 1e-6f * tr * tr) || !(tr > 0.f)) return false;
+  // With the gain: cur - mean = a (T + J d) is linear in (a, a dx, a dy); its
+  // 3x3 normal matrix depends on the template only.
+  Eigen::Matrix3f Minv = Eigen::Matrix3f::Zero();
+  if (params.compensate_gain) {
+    Eigen::Matrix3f M;
+    M << stt, stx, sty, stx, hxx, hxy, sty, hxy, hyy;
+    const float mdet = M.determinant();
+    if (!(mdet > 1e-6f * det * stt)) return false;  // contrast explained by the shift alone
+    Minv = M.inverse();
+  }
   const Eigen::Vector2f start = *p;
   Eigen::Vector2f q = start;
   float I[kMaxSide * kMaxSide];
+  float a = 1.f;
   for (int it = 0; it < params.iterations; ++it) {
     if (!sampleGrid(cur, q.x() - r, q.y() - r, n, I)) return false;
     float mi = 0;
     for (int k = 0; k < N; ++k) mi += I[k];
     mi /= N;
-    float bx = 0, by = 0;
-    for (int k = 0; k < N; ++k) {
-      const float e = (I[k] - mi) - (T[k] - mt);
-      bx += gx[k] * e;
-      by += gy[k] * e;
+    float dx, dy;
+    if (params.compensate_gain) {
+      Eigen::Vector3f rhs = Eigen::Vector3f::Zero();
+      for (int k = 0; k < N; ++k) {
+        const float e = I[k] - mi;
+        rhs += Eigen::Vector3f(T[k], gx[k], gy[k]) * e;
+      }
+      const Eigen::Vector3f x = Minv * rhs;
+      a = x[0];
+      if (!(a >= 0.25f && a <= 4.f)) return false;  // lost or inverted contrast
+      dx = x[1] / a;
+      dy = x[2] / a;
+    } else {
+      float bx = 0, by = 0;
+      for (int k = 0; k < N; ++k) {
+        const float e = (I[k] - mi) - T[k];
+        bx += gx[k] * e;
+        by += gy[k] * e;
+      }
+      dx = (hyy * bx - hxy * by) / det;
+      dy = (hxx * by - hxy * bx) / det;
     }
     // Inverse compositional: the template moved by d explains the residual; the
     // match in `cur` is therefore at q - d.
-    const float dx = (hyy * bx - hxy * by) / det;
-    const float dy = (hxx * by - hxy * bx) / det;
     q -= Eigen::Vector2f(dx, dy);
     if ((q - start).squaredNorm() > params.max_shift * params.max_shift) return false;
     if (dx * dx + dy * dy < 1e-4f) break;
   }
   *p = q;
+  if (gain) *gain = a;
   return true;
 }
 

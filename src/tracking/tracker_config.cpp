@@ -51,12 +51,16 @@ void TrackerConfig::validate() const {
   require(std::isfinite(min_track_curvature) && min_track_curvature >= 0.0, "min_track_curvature",
           "must be finite and >= 0");
   require(std::isfinite(max_curvature_ratio) && max_curvature_ratio >= 1.0, "max_curvature_ratio", "must be >= 1");
+  require(std::isfinite(strength_ratio_min_change) && strength_ratio_min_change >= 0.0, "strength_ratio_min_change",
+          "must be finite and >= 0");
   require(std::isfinite(min_track_sharpness) && min_track_sharpness >= 0.0, "min_track_sharpness",
           "must be finite and >= 0");
   require(std::isfinite(extremum_weight) && extremum_weight > 0.0 && extremum_weight <= 1.0, "extremum_weight",
           "must be in (0, 1]");
   require(align_radius_px >= 1 && align_radius_px <= 4, "align_radius_px", "must be in [1, 4]");
   require(align_iterations >= 1, "align_iterations", "must be >= 1");
+  require(std::isfinite(align_gain_min_change) && align_gain_min_change >= 0.0, "align_gain_min_change",
+          "must be finite and >= 0");
   require(std::isfinite(max_align_disagreement_px) && max_align_disagreement_px >= 0.0, "max_align_disagreement_px",
           "must be finite and >= 0");
   require(std::isfinite(confirm_max_unaligned_fraction) && confirm_max_unaligned_fraction >= 0.0 &&

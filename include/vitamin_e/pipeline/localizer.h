@@ -38,6 +38,7 @@ class Localizer {
                      const std::vector<std::uint64_t>& ids, const Eigen::Isometry3d& guess) const;
   geometry::PnpConfig pnp_;
   int min_inliers_;
+  double min_inlier_ratio_;
 };
 
 }  // namespace vitamin_e::pipeline

@@ -13,7 +13,12 @@
 // max_align_disagreement_px); (4) new extrema are
 // spawned in grid cells that lost their points. Curvature is normalized by a
 // robust per-frame scale (median |kappa|) so that lambda and the thresholds mean
-// the same under exposure changes.
+// the same under exposure changes. That median follows an exposure step only in
+// part (flat, noisy areas dominate it; the peaks scale by ~gain^3), so the
+// strength-change test compares each track with the frame's median change
+// (relative_strength_change), the absolute floor of tracked points follows the
+// change (floor_follows_exposure) and the patch alignment fits a contrast gain
+// on such frames (align_gain).
 #include <Eigen/Core>
 #include <cstdint>
 #include <map>
@@ -59,6 +64,15 @@ struct TrackerConfig {
   double fb_threshold_px = 1.0;     // forward-backward check: max distance back to the old position [px] (> 0)
   double min_track_curvature = 0.5; // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
   double max_curvature_ratio = 1.5; // ... or when its normalized |kappa| changes by more than this factor (>= 1)
+  bool relative_strength_change = true;  // ... relative to the frame's median change over all climbed tracks
+                                    // (an exposure step scales every peak by about the brightness ratio cubed,
+                                    // which the noise-dominated median |kappa| does not follow); false: relative to 1
+  double strength_ratio_min_change = 0.1;  // ... when that median change leaves [1/(1+this), 1+this]; within, against 1
+                                    // (ordinary frames scatter by a few %) (>= 0)
+  bool floor_follows_exposure = true;  // for a tracked point, min_abs_curvature follows the frames' common raw
+                                    // curvature change since the point was detected (exposure steps, smoothing
+                                    // changes), down to 1/16 of it: a darkening does not end the tracks that the
+                                    // relative tests keep; new points always need the full floor (false: fixed floor)
   double min_track_sharpness = 0.05;// ... or when the peak it climbed to has peakSharpness() below this [1/px^2]:
                                     // a ridge or plateau of kappa lets the position slide (0 = off)
   bool strength_at_subpixel_peak = true;  // the weak / strength-change checks use the height of the fitted
@@ -69,6 +83,10 @@ struct TrackerConfig {
                                     // removes its frame-to-frame jitter); 1 = the extremum alone (off)
   int align_radius_px = 4;          // patch of that alignment: (2r+1)^2 px, r in [1, 4]
   int align_iterations = 2;         // its Gauss-Newton steps (>= 1)
+  bool align_gain = true;           // that alignment fits a contrast gain per patch as well as the mean on frames
+                                    // whose contrast changed (an exposure step scales the patch; false: mean only)
+  double align_gain_min_change = 0.03;  // ... by more than this fraction, estimated as the cube root of the median
+                                    // peak ratio (kappa is cubic in intensity); 0 = on every frame (>= 0)
   double max_align_disagreement_px = 1.0;   // confirmation: a track dies when that patch alignment (started
                                     // from the flow prediction, independent of the climb) fails or ends farther
                                     // than this from the climbed extremum [px]: the climb jumped to a neighbouring
@@ -109,6 +127,10 @@ struct TrackerFrame {
   std::map<std::string, int> lost_new_by;  // the part of lost_by that was detected in the previous frame
   double noise_ratio = 0;            // estimated image noise sigma / median |gradient| of this frame
   double smoothing_sigma = 0;        // pre-smoothing used for this frame [px]
+  double curvature_scale = 0;        // median |kappa| of this frame (the unit of the normalized curvature)
+  double strength_ratio = 1;         // median over the climbed tracks of new / old normalized strength (1 when
+                                     // relative_strength_change is off or too few tracks)
+  double patch_gain = 1;             // median contrast gain of the patch alignment (1 where no gain was fitted)
   std::map<std::string, double> timing_ms;  // "curvature", "flow", "track", "detect", "total"
 };
 
