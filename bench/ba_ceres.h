@@ -3,7 +3,7 @@
 // SE(3) right-perturbation manifold, analytic reprojection Jacobians (the shared formulas of
 // geometry/projection.h) and the same Geman-McClure loss, solved by Levenberg-Marquardt.
 #include <algorithm>
-#include <chrono>
+#include "vitamin_e/common/timing.h"
 #include <vector>
 
 #include "vitamin_e/geometry/lie.h"
@@ -19,9 +19,6 @@ namespace bench {
 using optimization::BaObservation;
 using optimization::BaProblem;
 
-inline double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 // T_w_c as [t(3), q(4: x y z w)], tangent = right se(3) perturbation (rho, phi) as in lie.h.
 // The cost returns the tangent Jacobian in the first 6 columns and PlusJacobian = [I6; 0].
@@ -117,7 +114,7 @@ class GemanMcClureLoss : public ceres::LossFunction {
 
 // Solves `problem` in place with Ceres; returns wall time (problem construction + Solve).
 inline double solveCeres(BaProblem& problem, double sigma, double tolerance, bool sparse, int threads, int* iterations) {
-  const double t0 = nowMs();
+  const auto t0 = TimingClock::now();
   std::vector<double> cams(7 * problem.cameras.size()), pts(3 * problem.points.size());
   for (size_t c = 0; c < problem.cameras.size(); ++c) Se3RightManifold::toParams(problem.cameras[c].T_w_c, &cams[7 * c]);
   for (size_t p = 0; p < problem.points.size(); ++p) {
@@ -156,7 +153,7 @@ inline double solveCeres(BaProblem& problem, double sigma, double tolerance, boo
     problem.cameras[c].T_w_c = Se3RightManifold::fromParams(&cams[7 * c]);
   for (size_t p = 0; p < problem.points.size(); ++p) problem.points[p].p_w = Eigen::Map<Eigen::Vector3d>(&pts[3 * p]);
   *iterations = static_cast<int>(sum.iterations.size());
-  return nowMs() - t0;
+  return elapsedMs(t0);
 }
 
 }  // namespace bench

@@ -37,6 +37,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "cli.h"
 #include "dense_bench_scene.h"
 #include "vitamin_e/eval/alignment.h"
 #include "vitamin_e/io/dataset.h"
@@ -59,58 +60,67 @@ struct Args {
   bool gt_input = false;
   int step = 3, max_frames = 0, points = 5000;
   double noise = 0.01, outliers = 0.02;
-  bool nltgv = true;
+  bool no_nltgv = false;
   double voxel_lo = 0.15, voxel_hi = 0.025;  // metres
   double max_depth_hi = 6.0, weight_ref = 3.0;  // metres
   double trunc_voxels = 5.0;                    // truncation band half-width in voxels
-  std::vector<std::pair<std::string, std::string>> nltgv_opts;
+  // NLTGV changes on top of the config's dense section (negative: not given).
+  bool no_warm = false, warm_duals_only = false;
+  int warm_iters = -1, nltgv_iters = -1;
+  double beta = -1.0, lambda = -1.0;
 };
 
+const char* kUsage =
+    "usage: bench_fusion_dense RENDER_DIR [options]\n"
+    "  RENDER_DIR          a render of render_sequence.py (scene.json, groundtruth_cam0_tum.txt, mav0/)\n"
+    "  --config YAML       SLAM config (input and dense section)    --gt-input  ground-truth poses and depths\n"
+    "  --step N            every N-th tracked frame is meshed (3)   --max-frames N  at most N meshed frames\n"
+    "  --voxel-lo M, --voxel-hi M   the two TSDF voxel sizes [m] (0.15, 0.025)\n"
+    "  --trunc-voxels N    truncation in voxels (5)    --max-depth-2p5 M  depth limit of the fine TSDF [m] (6)\n"
+    "  --weight-ref M      depth weighting reference [m] (3)    --out DIR  write the meshes\n"
+    "  --no-nltgv, --no-warm, --warm-duals-only, --warm-iters N, --nltgv-iters N, --beta B, --lambda L\n"
+    "                      NLTGV changes on top of the config\n"
+    "  GT input only: --points N (5000), --noise REL (0.01), --outliers RATE (0.02)\n";
+
 Args parse(int argc, char** argv) {
+  namespace cli = vitamin_e::cli;
   Args a;
-  if (argc < 2) throw std::runtime_error("usage: bench_fusion_dense RENDER_DIR [options]");
-  a.dir = argv[1];
-  // Options that change NLTGV are applied on top of the config's dense section.
-  std::vector<std::pair<std::string, std::string>> nltgv_opts;
-  for (int i = 2; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value for " + k);
-      return argv[++i];
-    };
-    if (k == "--config") a.config = next();
-    else if (k == "--gt-input") a.gt_input = true;
-    else if (k == "--out") a.out = next();
-    else if (k == "--step") a.step = std::stoi(next());
-    else if (k == "--max-frames") a.max_frames = std::stoi(next());
-    else if (k == "--points") a.points = std::stoi(next());
-    else if (k == "--noise") a.noise = std::stod(next());
-    else if (k == "--outliers") a.outliers = std::stod(next());
-    else if (k == "--no-nltgv") a.nltgv = false;
-    else if (k == "--voxel-lo") a.voxel_lo = std::stod(next());
-    else if (k == "--voxel-hi") a.voxel_hi = std::stod(next());
-    else if (k == "--max-depth-2p5") a.max_depth_hi = std::stod(next());
-    else if (k == "--weight-ref") a.weight_ref = std::stod(next());
-    else if (k == "--trunc-voxels") a.trunc_voxels = std::stod(next());
-    else if (k == "--no-warm" || k == "--warm-duals-only") nltgv_opts.emplace_back(k, "");
-    else if (k == "--warm-iters" || k == "--nltgv-iters" || k == "--beta" || k == "--lambda")
-      nltgv_opts.emplace_back(k, next());
-    else throw std::runtime_error("unknown option " + k);
+  cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.positional(&a.dir) || args.value("--config", &a.config) || args.flag("--gt-input", &a.gt_input) ||
+        args.value("--out", &a.out) || args.value("--step", &a.step) || args.value("--max-frames", &a.max_frames) ||
+        args.value("--points", &a.points) || args.value("--noise", &a.noise) ||
+        args.value("--outliers", &a.outliers) || args.flag("--no-nltgv", &a.no_nltgv) ||
+        args.value("--voxel-lo", &a.voxel_lo) || args.value("--voxel-hi", &a.voxel_hi) ||
+        args.value("--max-depth-2p5", &a.max_depth_hi) || args.value("--weight-ref", &a.weight_ref) ||
+        args.value("--trunc-voxels", &a.trunc_voxels) || args.flag("--no-warm", &a.no_warm) ||
+        args.flag("--warm-duals-only", &a.warm_duals_only) || args.value("--warm-iters", &a.warm_iters) ||
+        args.value("--nltgv-iters", &a.nltgv_iters) || args.value("--beta", &a.beta) ||
+        args.value("--lambda", &a.lambda)) {
+      continue;
+    }
+    args.unknown();
   }
-  if (a.step < 1) throw std::runtime_error("--step must be >= 1");
-  a.nltgv_opts = nltgv_opts;
+  if (a.dir.empty()) cli::fail("RENDER_DIR is required (see --help)");
+  for (const char* f : {"/scene.json", "/groundtruth_cam0_tum.txt"}) {
+    if (!std::ifstream(a.dir + f)) cli::fail(a.dir + f + " not found (not a render_sequence.py output?)");
+  }
+  if (a.step < 1) cli::fail("--step must be >= 1");
+  if (a.max_frames < 0 || a.points < 1) cli::fail("--max-frames must be >= 0 and --points >= 1");
+  if (a.noise < 0 || a.outliers < 0 || a.outliers > 1) cli::fail("--noise must be >= 0, --outliers in [0, 1]");
+  if (!(a.voxel_lo > 0) || !(a.voxel_hi > 0) || !(a.trunc_voxels >= 1) || !(a.max_depth_hi > 0) || a.weight_ref < 0) {
+    cli::fail("--voxel-lo, --voxel-hi, --max-depth-2p5 must be > 0, --trunc-voxels >= 1, --weight-ref >= 0");
+  }
   return a;
 }
 
 void applyNltgvOptions(const Args& a, meshing::NltgvConfig* c) {
-  for (const auto& [k, v] : a.nltgv_opts) {
-    if (k == "--no-warm") c->warm_start = false;
-    else if (k == "--warm-duals-only") c->warm_start_primal = false;
-    else if (k == "--warm-iters") c->warm_iterations = std::stoi(v);
-    else if (k == "--nltgv-iters") c->iterations = std::stoi(v);
-    else if (k == "--beta") c->beta = std::stod(v);
-    else if (k == "--lambda") c->lambda = std::stod(v);
-  }
+  if (a.no_warm) c->warm_start = false;
+  if (a.warm_duals_only) c->warm_start_primal = false;
+  if (a.warm_iters >= 0) c->warm_iterations = a.warm_iters;
+  if (a.nltgv_iters >= 0) c->iterations = a.nltgv_iters;
+  if (a.beta >= 0) c->beta = a.beta;
+  if (a.lambda >= 0) c->lambda = a.lambda;
 }
 
 // One frame's input to the dense reconstruction (what the SLAM pipeline provides).
@@ -121,19 +131,6 @@ struct FrameInput {
   std::vector<Eigen::Vector3d> p_c;        // camera-frame points (map units)
   Eigen::Isometry3d T_w_c_true;            // ground-truth pose (evaluation only)
 };
-
-// CPU time of the calling thread (less sensitive than wall time to a loaded machine).
-double threadCpuMs() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-double processCpuMs() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
 double median(std::vector<double> v) { return percentile(std::move(v), 50.0); }
 
@@ -248,7 +245,7 @@ int main(int argc, char** argv) try {
   std::size_t slam_frames = 0, slam_tracked = 0;
   meshing::FrameMesherConfig build_cfg, prune_cfg;
   meshing::NltgvConfig nltgv_cfg;
-  bool denoise = args.nltgv;
+  bool denoise = !args.no_nltgv;
   fusion::TsdfConfig run_tsdf;
   StageTimings timings;
   if (!args.gt_input) {
@@ -269,7 +266,7 @@ int main(int argc, char** argv) try {
     if (args.max_frames > 0) n = std::min(n, static_cast<std::size_t>(args.max_frames) * args.step);
     for (std::size_t i = 0; i < n; ++i) {
       const cv::Mat img = dataset->loadImage(i);
-      const auto t0 = std::chrono::steady_clock::now();
+      const auto t0 = TimingClock::now();
       const double c0 = processCpuMs();
       const pipeline::FrameResult r = slam.process(img, dataset->timestamp(i), dataset->timestampText(i));
       slam_cpu_ms += processCpuMs() - c0;
@@ -382,7 +379,7 @@ int main(int argc, char** argv) try {
   std::vector<Vector3d> seen;  // points on true surfaces the camera saw (completeness)
   for (const FrameInput& in : frames) {
     // ---- the dense reconstruction of one frame (as fusion::DenseMapper::addFrame) ----
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = TimingClock::now();
     const double c0 = threadCpuMs();
     meshing::FrameMesh mesh;
     {
@@ -404,14 +401,14 @@ int main(int argc, char** argv) try {
     meshing::FrameMesh raw_pruned = raw;
     pruner.prune(&raw_pruned, K);
     verts.push_back(static_cast<double>(mesh.vertices.size()));
-    const auto t1 = std::chrono::steady_clock::now();
+    const auto t1 = TimingClock::now();
     const double c1b = threadCpuMs();
     tsdf15.integrate(mesh, in.T_w_c, K);
     tsdf15.updateMesh();
     t15_ms.push_back(elapsedMs(t1));
     const double c2 = threadCpuMs();
     t15_cpu.push_back(c2 - c1b);
-    const auto t2 = std::chrono::steady_clock::now();
+    const auto t2 = TimingClock::now();
     tsdf25.integrate(mesh, in.T_w_c, K);
     const double int25 = elapsedMs(t2);
     tsdf25.updateMesh();
@@ -530,6 +527,5 @@ int main(int argc, char** argv) try {
       accrun.empty() ? 0.0 : median(accrun), comprun);
   return 0;
 } catch (const std::exception& e) {
-  std::fprintf(stderr, "bench_fusion_dense: %s\n", e.what());
-  return 2;
+  vitamin_e::cli::fail(e.what());
 }

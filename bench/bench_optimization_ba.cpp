@@ -8,15 +8,15 @@
 // Subspace GN also runs to the tolerance with M threads (default 2; 0 = skip) on the same
 // problems, right after the N-thread run: the "*_2threads" / "*_mt" fields.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdio>
-#include <cstring>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "cli.h"
+#include "vitamin_e/common/timing.h"
 #include "vitamin_e/geometry/lie.h"
 #include "vitamin_e/geometry/projection.h"
 #include "vitamin_e/geometry/triangulation.h"
@@ -31,9 +31,6 @@ using namespace vitamin_e::optimization;
 
 namespace {
 
-double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 #ifdef VITAMIN_E_WITH_CERES
 using bench::solveCeres;
 #endif
@@ -74,8 +71,6 @@ struct Row {
   const Result& ceres() const { return ceres_dense.ms < ceres_sparse.ms ? ceres_dense : ceres_sparse; }
 };
 
-double cpuMs() { return 1000.0 * static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
-
 // Runs both solvers on copies of `start`; accumulates into row (cam error over free cameras).
 // Subspace GN runs twice: to the tolerance (max_sweeps 20) and with a per-frame budget of 5.
 void solveBoth(const BaProblem& start, const BaProblem& truth, const Args& a, Row* row, BaProblem* sgn_out) {
@@ -96,10 +91,11 @@ void solveBoth(const BaProblem& start, const BaProblem& truth, const Args& a, Ro
     if (budget) ob.max_sweeps = 5;
     if (mt) ob.threads = a.threads2;
     Result& r = mt ? (budget ? row->sgn_budget_mt : row->sgn_mt) : (budget ? row->sgn_budget : row->sgn);
-    const double t0 = nowMs(), c0 = cpuMs();
+    const auto t0 = TimingClock::now();
+    const double c0 = processCpuMs();
     const BaSummary sum = solveSubspaceGaussNewton(b, ob);
-    r.ms += nowMs() - t0;
-    r.cpu_ms += cpuMs() - c0;
+    r.ms += elapsedMs(t0);
+    r.cpu_ms += processCpuMs() - c0;
     r.iters += sum.sweeps;
     r.rejects += sum.rejected_steps;
     const double cost = baCost(b, o.robust_sigma_px);
@@ -116,9 +112,9 @@ void solveBoth(const BaProblem& start, const BaProblem& truth, const Args& a, Ro
     BaProblem c = start;
     int it = 0;
     Result& r = dense ? row->ceres_dense : row->ceres_sparse;
-    const double c0 = cpuMs();
+    const double c0 = processCpuMs();
     r.ms += solveCeres(c, o.robust_sigma_px, o.tolerance, !dense, a.threads, &it);
-    r.cpu_ms += cpuMs() - c0;
+    r.cpu_ms += processCpuMs() - c0;
     r.iters += it;
     r.cost += baCost(c, o.robust_sigma_px);
     r.err += cameraPositionRmse(c, truth, mask);
@@ -337,23 +333,43 @@ int runAll(const Args& a) {
 
 }  // namespace
 
+const char* kUsage =
+    "usage: bench_optimization_ba [--quick] [--no-ceres] [--threads N] [--threads2 M] [--free-cams K] [--frames F]\n"
+    "                             [--point-iterations P] [--point-extrapolation E] [--point-tolerance T]\n"
+    "  --quick               smaller problems\n"
+    "  --no-ceres            subspace Gauss-Newton only\n"
+    "  --threads N           threads of the first subspace GN run (default 1)\n"
+    "  --threads2 M          a second run with M threads (default 2; 0: none)\n"
+    "  --free-cams K         incremental: newest cameras free per frame (default 3)\n"
+    "  --frames F            incremental: frames (default 5)\n"
+    "  --point-iterations P, --point-extrapolation E, --point-tolerance T\n"
+    "                        per-point refinement (optimization::BaOptions; default 2, 8, 1e-4)\n";
+
 int main(int argc, char** argv) {
+  namespace cli = vitamin_e::cli;
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) a.quick = true;
-    else if (!std::strcmp(argv[i], "--no-ceres")) a.no_ceres = true;
-    else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) a.threads = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--threads2") && i + 1 < argc) a.threads2 = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--free-cams") && i + 1 < argc) a.free_cams = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) a.frames = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--point-iterations") && i + 1 < argc) a.point_iterations = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--point-extrapolation") && i + 1 < argc) a.point_extrapolation = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--point-tolerance") && i + 1 < argc) a.point_tolerance = std::atof(argv[++i]);
-    else {
-      std::fprintf(stderr, "usage: %s [--quick] [--no-ceres] [--threads N] [--threads2 M] [--free-cams K] [--frames F] [--point-iterations P] "
-                   "[--point-extrapolation E] [--point-tolerance T]\n", argv[0]);
-      return 2;
+  cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.flag("--quick", &a.quick) || args.flag("--no-ceres", &a.no_ceres) ||
+        args.value("--threads", &a.threads) || args.value("--threads2", &a.threads2) ||
+        args.value("--free-cams", &a.free_cams) || args.value("--frames", &a.frames) ||
+        args.value("--point-iterations", &a.point_iterations) ||
+        args.value("--point-extrapolation", &a.point_extrapolation) ||
+        args.value("--point-tolerance", &a.point_tolerance)) {
+      continue;
     }
+    args.unknown();
   }
-  return runAll(a);
+  if (a.threads < 1) cli::fail("--threads must be >= 1");
+  if (a.threads2 < 0) cli::fail("--threads2 must be >= 0");
+  if (a.free_cams < 1 || a.free_cams > 8) cli::fail("--free-cams must be in [1, 8] (a window of 10, 2 fixed)");
+  if (a.frames < 1) cli::fail("--frames must be >= 1");
+  if (a.point_iterations < 0 || a.point_extrapolation < 0 || a.point_tolerance < 0) {
+    cli::fail("--point-iterations, --point-extrapolation and --point-tolerance must be >= 0");
+  }
+  try {
+    return runAll(a);
+  } catch (const std::exception& e) {
+    cli::fail(e.what());
+  }
 }

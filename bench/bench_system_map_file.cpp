@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "vitamin_e/common/timing.h"
 #include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/relocalizer.h"
@@ -29,10 +30,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-[[noreturn]] void fail(const std::string& m) {
-  std::fprintf(stderr, "error: %s\n", m.c_str());
-  std::exit(2);
-}
+namespace cli = vitamin_e::cli;
+using cli::fail;
+
+const char* kUsage =
+    "usage: bench_system_map_file [--points N] [--keyframes K] [--repeat R] | --map FILE [--config YAML] [--repeat R]\n"
+    "  --points N     synthetic map: N points (landmarks and dormant), N archived (default 100000)\n"
+    "  --keyframes K  synthetic map: K indexed keyframes of 1,500 points (default 400, the relocalizer's maximum)\n"
+    "  --map FILE     a saved map instead: its load time and the load -> save round trip (same bytes)\n"
+    "  --config YAML  the configuration the map was made with (the keyframe window, the descriptors)\n"
+    "  --repeat R     loads timed (default 5)\n";
 
 std::string readAll(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -127,24 +134,15 @@ int main(int argc, char** argv) {
   std::size_t points = 100000, keyframes = 400;
   int repeat = 5;
   std::string map_path, config_path;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) fail(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--points") points = std::stoul(next());
-    else if (a == "--keyframes") keyframes = std::stoul(next());
-    else if (a == "--repeat") repeat = std::max(1, std::stoi(next()));
-    else if (a == "--map") map_path = next();
-    else if (a == "--config") config_path = next();
-    else if (a == "-h" || a == "--help") {
-      std::printf("usage: bench_system_map_file [--points N] [--keyframes K] [--repeat R] | --map FILE [--config YAML]\n");
-      return 0;
-    } else {
-      fail("unknown option '" + a + "'");
+  cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.value("--points", &points) || args.value("--keyframes", &keyframes) || args.value("--repeat", &repeat) ||
+        args.value("--map", &map_path) || args.value("--config", &config_path)) {
+      continue;
     }
+    args.unknown();
   }
+  if (repeat < 1) fail("--repeat must be >= 1");
   try {
     const ve::pipeline::SystemConfig config =
         config_path.empty() ? ve::pipeline::SystemConfig{} : ve::pipeline::loadSystemConfig(config_path);

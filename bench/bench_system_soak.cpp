@@ -21,6 +21,8 @@
 #include <thread>
 #include <vector>
 
+#include "cli.h"
+#include "vitamin_e/common/timing.h"
 #include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/synth/camera_path.h"
 #include "vitamin_e/synth/renderer.h"
@@ -70,16 +72,20 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
   return sxx > 0 ? sxy / sxx : 0.0;
 }
 
-[[noreturn]] void usage(const std::string& msg) {
-  std::cerr << "error: " << msg
-            << "\nusage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]"
-               " [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]\n";
-  std::exit(2);
-}
+const char* kUsage =
+    "usage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]\n"
+    "                         [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]\n"
+    "  --minutes M        wall-clock minutes to run (default 60)\n"
+    "  --sample-every N   frames between memory samples (default 200)\n"
+    "  --width W --height H  image size (default 376x240)\n"
+    "  --archive-voxel V  map.archive_voxel_m (default: the shipped default)\n"
+    "  --max-frames F     stop after F frames (0: no limit)\n"
+    "  --seed S           scene and noise seed\n"
+    "  --realtime         pace the frames at 20 Hz, as a camera\n";
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) try {
   double minutes = 60.0;
   int sample_every = 200;
   int width = 376, height = 240;
@@ -87,28 +93,22 @@ int main(int argc, char** argv) {
   long long max_frames = 0;
   std::uint64_t seed = 0;
   bool realtime = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--realtime") {
-      realtime = true;
+  namespace cli = ve::cli;
+  cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.flag("--realtime", &realtime) || args.value("--minutes", &minutes) ||
+        args.value("--sample-every", &sample_every) || args.value("--width", &width) ||
+        args.value("--height", &height) || args.value("--archive-voxel", &archive_voxel) ||
+        args.value("--max-frames", &max_frames) || args.value("--seed", &seed)) {
       continue;
     }
-    if (i + 1 >= argc) usage(a + " needs a value");
-    const std::string v = argv[++i];
-    try {
-      if (a == "--minutes") minutes = std::stod(v);
-      else if (a == "--sample-every") sample_every = std::stoi(v);
-      else if (a == "--width") width = std::stoi(v);
-      else if (a == "--height") height = std::stoi(v);
-      else if (a == "--archive-voxel") archive_voxel = std::stod(v);
-      else if (a == "--max-frames") max_frames = std::stoll(v);
-      else if (a == "--seed") seed = std::stoull(v);
-      else usage("unknown option '" + a + "'");
-    } catch (const std::logic_error&) {
-      usage("bad value '" + v + "' for " + a);
-    }
+    args.unknown();
   }
-  if (!(minutes > 0) || sample_every < 1 || width < 64 || height < 48 || archive_voxel < 0) usage("bad values");
+  if (!(minutes > 0)) cli::fail("--minutes must be > 0");
+  if (sample_every < 1) cli::fail("--sample-every must be >= 1");
+  if (width < 64 || height < 48) cli::fail("--width/--height must be at least 64x48");
+  if (archive_voxel < 0) cli::fail("--archive-voxel must be >= 0");
+  if (max_frames < 0) cli::fail("--max-frames must be >= 0");
 
   // The scene is built around two laps of the path; the path is periodic in
   // position, so boxes stay clear of it for the whole run.
@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
   const ve::synth::CameraPath path(ve::synth::makeSequencePath(seq));
   const double lap_s = 2.0 * M_PI / path.angularRate();
   seq.frames = static_cast<int>(std::ceil(2.0 * lap_s * seq.rate_hz));
-  const auto t_scene = std::chrono::steady_clock::now();
+  const auto t_scene = ve::TimingClock::now();
   const ve::synth::Scene scene = ve::synth::makeSequenceScene(seq, path);
   const ve::synth::Renderer renderer(scene, camera);
 
@@ -139,14 +139,14 @@ int main(int argc, char** argv) {
               width, height, seq.rate_hz, realtime ? " paced in real time" : "", lap_s, minutes, sample_every,
               archive_voxel, config.map.max_archive_points, config.map.max_dormant_landmarks);
   std::printf("# scene built in %.1f s; RSS at start %.1f MB\n",
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_scene).count(), rssMb());
+              ve::elapsedMs(t_scene) / 1000.0, rssMb());
   std::printf("%8s %9s %9s %9s %10s %8s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts",
               "dormant", "traj", "retries", "ms/frame");
   std::fflush(stdout);
 
   std::vector<Sample> samples;
-  const auto start = std::chrono::steady_clock::now();
-  auto wallMin = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / 60.0; };
+  const auto start = ve::TimingClock::now();
+  auto wallMin = [&] { return ve::elapsedMs(start) / 60000.0; };
   auto last_sample_time = start;
   std::uint64_t tracked = 0, nonfinite = 0;
   double max_step = 0.0;
@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
     }
     const bool done = wallMin() >= minutes || (max_frames > 0 && static_cast<long long>(frame + 1) >= max_frames);
     if ((frame + 1) % sample_every == 0 || done) {
-      const auto now = std::chrono::steady_clock::now();
+      const auto now = ve::TimingClock::now();
       Sample smp;
       smp.frame = frame + 1;
       smp.wall_min = wallMin();
@@ -253,4 +253,6 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(nonfinite), max_step, samples.front().rss_mb, rss_end, rss_slope,
               unexplained, samples.back().map_points, flat ? "true" : "false", flat || explained ? "true" : "false");
   return nonfinite > 0 ? 1 : 0;
+} catch (const std::exception& e) {
+  vitamin_e::cli::fail(e.what());
 }

@@ -4,12 +4,12 @@
 // scene's room and boxes) is projected (with distortion) into frame k; a track
 // step is an inlier when it lands within 1 px of that reprojection.
 //   bench_tracking_render RENDER_DIR [--start K] [--frames N] [--max-points N] [--threads N] [--per-frame 1]
+//   (--help lists every option)
 // --per-frame 1 prints per frame (stderr) the tracked/new counts, the frame's
 // curvature scale, median strength ratio and patch gain, the losses by check and
 // the steps' precision: run it on an exposure step (exposure.csv of the render)
-// with --start N --frames N. Most TrackerConfig fields have a switch (see the
-// option list below), e.g. --relative-strength 0 --floor-follows 0 --align-gain 0
-// for the tracker of before the exposure-step handling.
+// with --start N --frames N. --relative-strength 0 --floor-follows 0 --align-gain 0
+// give the tracker of before the exposure-step handling.
 // Track length is given three ways: over every track ever started (most new
 // extrema end at their first step, so this median is 1-2), over the tracks that
 // survived their first step, and as the median age of the tracked points of a
@@ -17,7 +17,6 @@
 // Prints a table and, as the last line, a JSON summary.
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -26,7 +25,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <ctime>
 #include <unordered_map>
 #include <vector>
 
@@ -34,13 +32,13 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "cli.h"
 #include "vitamin_e/camera/camera.h"
 #include "vitamin_e/common/timing.h"
 #include "vitamin_e/tracking/dense_tracker.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 namespace vt = vitamin_e::tracking;
 
 // ---- camera: the render's calibration through the camera module ----
@@ -197,68 +195,70 @@ struct RunStats {
 // ground-truth reprojection of its first observation.
 constexpr int kDriftAge = 10;
 
-// CPU time of the whole process (all threads) [ms]: unlike wall time it is not
-// inflated by other processes competing for the cores.
-double cpuMs() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
 double median(std::vector<double> v) { return vitamin_e::percentile(std::move(v), 50.0); }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: %s RENDER_DIR [--frames N] [--max-points N] [--threads N]\n", argv[0]);
-    return 2;
-  }
-  const std::string dir = argv[1];
+const char* kUsage =
+    "usage: bench_tracking_render RENDER_DIR [options]\n"
+    "  RENDER_DIR   a render of render_sequence.py (scene.json, mav0/cam0, ground truth)\n"
+    "  --start K    skip the first K frames          --frames N   use at most N frames\n"
+    "  --per-frame 0|1   one line per frame on stderr (tracked, new, flow, losses by reason)\n"
+    "  --klt 0|1    also run OpenCV KLT (default 1)\n"
+    "tracker settings (tracking::TrackerConfig, docs/CONFIG.md section tracker):\n"
+    "  --max-points N  --threads N  --lambda X  --min-curvature X  --cell N (grid_cell_px)  --fb X\n"
+    "  --sigma X (smoothing_sigma)  --ratio X (max_curvature_ratio)  --refine 0|1  --parallax 0|1\n"
+    "  --ksigma X  --polish N  --adaptive 0|1  --max-sigma X  --noise-ref X  --blend X  --nms N\n"
+    "  --track-sigma X  --min-track-curvature X  --per-cell N  --track-sharpness X  --extremum-weight X\n"
+    "  --align-radius N  --align-iterations N  --disagree X  --confirm-max-unaligned X\n"
+    "  --subpixel-strength 0|1  --relative-strength 0|1  --ratio-min-change X  --floor-follows 0|1\n"
+    "  --align-gain 0|1  --align-gain-min X\n";
+
+int main(int argc, char** argv) try {
+  namespace cli = vitamin_e::cli;
+  std::string dir;
   int max_frames = 1 << 30;
   int start_frame = 0;
-  int per_frame = 0;  // 1: one line per frame on stderr (tracked, new, flow, losses by reason)
-  int run_klt = 1;
+  bool per_frame = false;
+  bool run_klt = true;
   vt::TrackerConfig cfg;
-  for (int i = 2; i + 1 < argc; i += 2) {
-    const std::string k = argv[i];
-    if (k == "--frames") max_frames = std::stoi(argv[i + 1]);
-    else if (k == "--start") start_frame = std::stoi(argv[i + 1]);
-    else if (k == "--per-frame") per_frame = std::stoi(argv[i + 1]);
-    else if (k == "--max-points") cfg.max_points = std::stoi(argv[i + 1]);
-    else if (k == "--threads") cfg.threads = std::stoi(argv[i + 1]);
-    else if (k == "--lambda") cfg.lambda = std::stod(argv[i + 1]);
-    else if (k == "--min-curvature") cfg.min_curvature = std::stod(argv[i + 1]);
-    else if (k == "--cell") cfg.grid_cell_px = std::stoi(argv[i + 1]);
-    else if (k == "--fb") cfg.fb_threshold_px = std::stod(argv[i + 1]);
-    else if (k == "--sigma") cfg.smoothing_sigma = std::stod(argv[i + 1]);
-    else if (k == "--ratio") cfg.max_curvature_ratio = std::stod(argv[i + 1]);
-    else if (k == "--refine") cfg.refine_flow = std::stoi(argv[i + 1]);
-    else if (k == "--parallax") cfg.predict_parallax = std::stoi(argv[i + 1]);
-    else if (k == "--ksigma") cfg.kappa_smoothing_sigma = std::stod(argv[i + 1]);
-    else if (k == "--polish") cfg.polish_steps = std::stoi(argv[i + 1]);
-    else if (k == "--adaptive") cfg.adaptive_smoothing = std::stoi(argv[i + 1]);
-    else if (k == "--max-sigma") cfg.max_smoothing_sigma = std::stod(argv[i + 1]);
-    else if (k == "--noise-ref") cfg.noise_reference = std::stod(argv[i + 1]);
-    else if (k == "--blend") cfg.prediction_blend = std::stod(argv[i + 1]);
-    else if (k == "--nms") cfg.nms_radius_px = std::stoi(argv[i + 1]);
-    else if (k == "--track-sigma") cfg.track_sigma_px = std::stod(argv[i + 1]);
-    else if (k == "--min-track-curvature") cfg.min_track_curvature = std::stod(argv[i + 1]);
-    else if (k == "--per-cell") cfg.max_per_cell = std::stoi(argv[i + 1]);
-    else if (k == "--track-sharpness") cfg.min_track_sharpness = std::stod(argv[i + 1]);
-    else if (k == "--extremum-weight") cfg.extremum_weight = std::stod(argv[i + 1]);
-    else if (k == "--align-radius") cfg.align_radius_px = std::stoi(argv[i + 1]);
-    else if (k == "--align-iterations") cfg.align_iterations = std::stoi(argv[i + 1]);
-    else if (k == "--disagree") cfg.max_align_disagreement_px = std::stod(argv[i + 1]);
-    else if (k == "--confirm-max-unaligned") cfg.confirm_max_unaligned_fraction = std::stod(argv[i + 1]);
-    else if (k == "--klt") run_klt = std::stoi(argv[i + 1]);
-    else if (k == "--subpixel-strength") cfg.strength_at_subpixel_peak = std::stoi(argv[i + 1]);
-    else if (k == "--relative-strength") cfg.relative_strength_change = std::stoi(argv[i + 1]);
-    else if (k == "--ratio-min-change") cfg.strength_ratio_min_change = std::stod(argv[i + 1]);
-    else if (k == "--floor-follows") cfg.floor_follows_exposure = std::stoi(argv[i + 1]);
-    else if (k == "--align-gain-min") cfg.align_gain_min_change = std::stod(argv[i + 1]);
-    else if (k == "--align-gain") cfg.align_gain = std::stoi(argv[i + 1]);
-    else { std::fprintf(stderr, "unknown option %s\n", k.c_str()); return 2; }
+  cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.positional(&dir) || args.value("--frames", &max_frames) || args.value("--start", &start_frame) ||
+        args.value("--per-frame", &per_frame) || args.value("--klt", &run_klt) ||
+        args.value("--max-points", &cfg.max_points) || args.value("--threads", &cfg.threads) ||
+        args.value("--lambda", &cfg.lambda) || args.value("--min-curvature", &cfg.min_curvature) ||
+        args.value("--cell", &cfg.grid_cell_px) || args.value("--fb", &cfg.fb_threshold_px) ||
+        args.value("--sigma", &cfg.smoothing_sigma) || args.value("--ratio", &cfg.max_curvature_ratio) ||
+        args.value("--refine", &cfg.refine_flow) || args.value("--parallax", &cfg.predict_parallax) ||
+        args.value("--ksigma", &cfg.kappa_smoothing_sigma) || args.value("--polish", &cfg.polish_steps) ||
+        args.value("--adaptive", &cfg.adaptive_smoothing) || args.value("--max-sigma", &cfg.max_smoothing_sigma) ||
+        args.value("--noise-ref", &cfg.noise_reference) || args.value("--blend", &cfg.prediction_blend) ||
+        args.value("--nms", &cfg.nms_radius_px) || args.value("--track-sigma", &cfg.track_sigma_px) ||
+        args.value("--min-track-curvature", &cfg.min_track_curvature) ||
+        args.value("--per-cell", &cfg.max_per_cell) || args.value("--track-sharpness", &cfg.min_track_sharpness) ||
+        args.value("--extremum-weight", &cfg.extremum_weight) ||
+        args.value("--align-radius", &cfg.align_radius_px) ||
+        args.value("--align-iterations", &cfg.align_iterations) ||
+        args.value("--disagree", &cfg.max_align_disagreement_px) ||
+        args.value("--confirm-max-unaligned", &cfg.confirm_max_unaligned_fraction) ||
+        args.value("--subpixel-strength", &cfg.strength_at_subpixel_peak) ||
+        args.value("--relative-strength", &cfg.relative_strength_change) ||
+        args.value("--ratio-min-change", &cfg.strength_ratio_min_change) ||
+        args.value("--floor-follows", &cfg.floor_follows_exposure) ||
+        args.value("--align-gain-min", &cfg.align_gain_min_change) || args.value("--align-gain", &cfg.align_gain)) {
+      continue;
+    }
+    args.unknown();
+  }
+  if (dir.empty()) cli::fail("RENDER_DIR is required (see --help)");
+  if (!std::ifstream(dir + "/scene.json")) cli::fail(dir + ": not a render (no scene.json)");
+  if (max_frames < 2) cli::fail("--frames must be >= 2");
+  if (start_frame < 0) cli::fail("--start must be >= 0");
+  try {
+    cfg.validate();
+  } catch (const std::exception& e) {
+    cli::fail(e.what());
   }
   LensModel cam;
   cam.cam = vitamin_e::camera::loadEurocSensorYaml(dir + "/mav0/cam0/sensor.yaml").camera;
@@ -286,13 +286,13 @@ int main(int argc, char** argv) {
   long spawned = 0;
   std::vector<double> live_age;  // per frame: median age + 1 of its tracked points (point-weighted length)
   for (size_t k = 0; k < frames.size(); ++k) {
-    const auto t0 = Clock::now();
-    const double c0 = cpuMs();
+    const auto t0 = vitamin_e::TimingClock::now();
+    const double c0 = vitamin_e::processCpuMs();
     const vt::TrackerFrame tf = tracker.track(images[k], std::stod(frames[k].ns) * 1e-9);
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const double ms = vitamin_e::elapsedMs(t0);
     ours.points.push_back(tf.points.size());
     ours.ms.push_back(ms);
-    ours.cpu.push_back(cpuMs() - c0);
+    ours.cpu.push_back(vitamin_e::processCpuMs() - c0);
     for (const auto& kv : tf.timing_ms) stage[kv.first].push_back(kv.second);
     stage["(smoothing sigma px)"].push_back(tf.smoothing_sigma);
     stage["(noise ratio)"].push_back(tf.noise_ratio);
@@ -367,8 +367,8 @@ int main(int argc, char** argv) {
   std::vector<std::pair<cv::Point2f, size_t>> births, next_births;
   std::vector<int> klt_life;
   for (size_t k = 0; k < frames.size(); ++k) {
-    const auto t0 = Clock::now();
-    const double c0 = cpuMs();
+    const auto t0 = vitamin_e::TimingClock::now();
+    const double c0 = vitamin_e::processCpuMs();
     std::vector<cv::Point2f> next;
     std::vector<int> next_age;
     std::vector<cv::Point2f> from;
@@ -403,8 +403,8 @@ int main(int argc, char** argv) {
         next_births.push_back({q, k});
       }
     }
-    klt.ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-    klt.cpu.push_back(cpuMs() - c0);
+    klt.ms.push_back(vitamin_e::elapsedMs(t0));
+    klt.cpu.push_back(vitamin_e::processCpuMs() - c0);
     klt.points.push_back(next.size());
     for (size_t i = 0; i < n_tracked; ++i) {
       Eigen::Vector2d truth;
@@ -475,4 +475,6 @@ int main(int argc, char** argv) {
               ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
               klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
   return 0;
+} catch (const std::exception& e) {
+  vitamin_e::cli::fail(e.what());
 }

@@ -4,6 +4,9 @@ foreach(bench_src ${VITAMIN_E_BENCHES})
   get_filename_component(bench ${bench_src} NAME_WE)
   string(REGEX REPLACE "^bench_([a-z]+)_.*$" "\\1" bench_module ${bench})
   add_executable(${bench} ${bench_src})
+  # cli.h: the option parsing of the command-line tools (one error line and exit 2, --help).
+  target_include_directories(${bench} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src/apps)
+  list(APPEND VITAMIN_E_BENCH_TARGETS ${bench})
   if(TARGET vitamin_e_${bench_module})
     target_link_libraries(${bench} vitamin_e_${bench_module})
   else()
@@ -18,4 +21,8 @@ endforeach()
 # The dense benchmark runs the SLAM system on the render (its default input).
 if(TARGET bench_fusion_dense AND TARGET vitamin_e_pipeline)
   target_link_libraries(bench_fusion_dense vitamin_e_pipeline)
+endif()
+# test_common_bench_options runs every benchmark with --help and a bad option.
+if(TARGET test_common_bench_options)
+  add_dependencies(test_common_bench_options ${VITAMIN_E_BENCH_TARGETS})
 endif()

@@ -13,15 +13,17 @@
 # written to $VE_BENCH_OUT if set.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-[ $# -ge 1 ] || ve_die "usage: bench_dense.sh RENDER_DIR [--config YAML] [--gt-input] [options]"
+if ve_wants_help "$@"; then bin="$(ve_bench_bin bench_fusion_dense)"; exec "$bin" --help; fi
+[ $# -ge 1 ] || ve_die "usage: bench_dense.sh RENDER_DIR [--config YAML] [--gt-input] [options] (see --help)"
 render="$1"; shift
+case "$render" in -*) ve_die "the first argument must be RENDER_DIR, got '$render' (see --help)" ;; esac
 [ -f "$render/scene.json" ] || ve_die "$render/scene.json not found (not a render_sequence.py output?)"
 [ -f "$render/groundtruth_cam0_tum.txt" ] || ve_die "$render/groundtruth_cam0_tum.txt not found"
-"$VE_ROOT/scripts/build.sh" --target bench_fusion_dense >&2
+bin="$(ve_bench_bin bench_fusion_dense)"
 extra=()
 if [ -n "${VE_BENCH_OUT:-}" ]; then mkdir -p "$VE_BENCH_OUT"; extra+=(--out "$VE_BENCH_OUT"); fi
 case " $* " in
   *" --config "*|*" --gt-input "*) ;;
   *) extra+=(--config "$VE_ROOT/config/euroc.yaml") ;;
 esac
-exec "$VE_WS/devel/lib/vitamin_e/bench_fusion_dense" "$render" "${extra[@]}" "$@"
+exec "$bin" "$render" "${extra[@]}" "$@"

@@ -12,7 +12,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -58,7 +57,9 @@ const char* kUsage =
     "  --pipelined      tracking and mapping on two threads (frame k+1 is tracked while k is mapped);\n"
     "                   default: sequential, deterministic\n"
     "  --log-frames     print one line per frame on stdout: index, time, state, tracks, mapped, ms, message\n"
-    "  --print-config   print every SLAM parameter in force (defaults + --config) and exit\n"
+    "  --print-config   print every SLAM parameter in force (defaults + --config), as a config file, and exit\n"
+    "  --print-config-markdown  print the configuration reference (docs/CONFIG.md: every key, its\n"
+    "                   default and meaning) and exit\n"
     "  --check          no SLAM: read every frame and print 'index timestamp WxH mean' lines\n"
     "                   on stdout (a dataset check; --out is not needed)\n"
     "  --load-map FILE  start in this map (a --save-map file of the same camera): the camera is found\n"
@@ -92,6 +93,7 @@ struct Options {
   bool quiet = false;
   bool check = false;
   bool print_config = false;
+  bool print_reference = false;
   bool log_frames = false;
   bool pipelined = false;
   std::string load_map, save_map, load_tsdf, save_tsdf;
@@ -137,6 +139,10 @@ Options parseArgs(int argc, char** argv) {
       o.print_config = true;
       continue;
     }
+    if (a == "--print-config-markdown") {
+      o.print_reference = true;
+      continue;
+    }
     if (a == "--localization-only") {
       o.localization_only = true;
       continue;
@@ -156,7 +162,7 @@ Options parseArgs(int argc, char** argv) {
     else if (a == "--save-tsdf") o.save_tsdf = v;
     else fail("unknown option '" + a + "' (see --help)");
   }
-  if (o.print_config) return o;
+  if (o.print_config || o.print_reference) return o;
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
   if (o.out.empty() && !o.check) fail("--out DIR is required (see --help)");
   if (o.localization_only && o.load_map.empty()) fail("--localization-only needs --load-map FILE (a map to localize in)");
@@ -219,7 +225,7 @@ class Progress {
  private:
   std::size_t total_;
   bool quiet_, tty_;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  vitamin_e::TimingClock::time_point start_ = vitamin_e::TimingClock::now();
   double last_ = -1e9;
 };
 
@@ -243,6 +249,10 @@ int checkFrames(const io::Dataset& dataset, std::size_t begin, std::size_t end) 
 }
 
 int run(const Options& o) {
+  if (o.print_reference) {
+    std::cout << pl::configReferenceMarkdown();
+    return 0;
+  }
   const pl::SystemConfig config = o.check ? pl::SystemConfig{} : loadConfig(o.config);
   if (o.print_config) {
     std::cout << config.describe();
@@ -303,7 +313,7 @@ int run(const Options& o) {
   stats.loaded_map = o.load_map;
   stats.localization_only = o.localization_only;
   Progress progress(end - o.start_frame, o.quiet);
-  const auto t_start = std::chrono::steady_clock::now();
+  const auto t_start = vitamin_e::TimingClock::now();
   std::size_t attempted = 0;
   // Everything done with a frame's result: stats, progress, per-frame log, dense
   // mapping. Runs on the main thread (sequential) or the mapping thread
@@ -354,7 +364,7 @@ int run(const Options& o) {
   for (std::size_t i = o.start_frame; i < end && !g_stop; ++i) {
     ++attempted;
     cv::Mat image;
-    const auto t_load = std::chrono::steady_clock::now();
+    const auto t_load = vitamin_e::TimingClock::now();
     try {
       image = dataset->loadImage(i);
     } catch (const io::DatasetError& e) {
@@ -408,7 +418,7 @@ int run(const Options& o) {
                  "%zu map points\n",
                  stats.frames, stats.tracked_frames, 100.0 * stats.successRate(), stats.skipped_frames,
                  stats.init_retries, stats.relocalizations, stats.map_points);
-    std::fprintf(stderr, "%s", io::timingTable(stats.timing).c_str());
+    std::fprintf(stderr, "%s", stats.timing.table(io::reportStages(stats.timing)).c_str());
     std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s%s%s (peak RSS %.0f MB)\n", traj_path.c_str(),
                  stats_path.c_str(), ply_path.c_str(), dense ? ", " : "", dense ? mesh_path.c_str() : "",
                  stats.peak_rss_mb);

@@ -1,10 +1,24 @@
 #include "vitamin_e/common/timing.h"
 
+#include <time.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <numeric>
 
 namespace vitamin_e {
+
+double processCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+double threadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
 
 double percentile(std::vector<double> values, double pct) {
   if (values.empty()) return 0.0;
@@ -22,7 +36,22 @@ double upperMedian(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
+StageTimings::StageTimings(const StageTimings& other) {
+  std::lock_guard<std::mutex> lock(other.mutex_);
+  samples_ = other.samples_;
+  order_ = other.order_;
+}
+
+StageTimings& StageTimings::operator=(const StageTimings& other) {
+  if (this == &other) return *this;
+  std::scoped_lock lock(mutex_, other.mutex_);
+  samples_ = other.samples_;
+  order_ = other.order_;
+  return *this;
+}
+
 void StageTimings::add(const std::string& stage, double ms) {
+  std::lock_guard<std::mutex> lock(mutex_);
   auto it = samples_.find(stage);
   if (it == samples_.end()) {
     order_.push_back(stage);
@@ -31,15 +60,20 @@ void StageTimings::add(const std::string& stage, double ms) {
   it->second.push_back(ms);
 }
 
-const std::vector<double>& StageTimings::samples(const std::string& stage) const {
-  static const std::vector<double> kEmpty;
+std::vector<std::string> StageTimings::stages() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return order_;
+}
+
+std::vector<double> StageTimings::samples(const std::string& stage) const {
+  std::lock_guard<std::mutex> lock(mutex_);
   auto it = samples_.find(stage);
-  return it == samples_.end() ? kEmpty : it->second;
+  return it == samples_.end() ? std::vector<double>{} : it->second;
 }
 
 TimingSummary StageTimings::summary(const std::string& stage) const {
   TimingSummary s;
-  const auto& v = samples(stage);
+  const std::vector<double> v = samples(stage);
   if (v.empty()) return s;
   s.count = v.size();
   s.mean_ms = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
@@ -48,12 +82,14 @@ TimingSummary StageTimings::summary(const std::string& stage) const {
   return s;
 }
 
-std::string StageTimings::table() const {
+std::string StageTimings::table() const { return table(stages()); }
+
+std::string StageTimings::table(const std::vector<std::string>& stages) const {
   std::string out;
   char line[160];
   std::snprintf(line, sizeof(line), "%-24s %10s %10s %10s %8s\n", "stage", "mean ms", "median ms", "p95 ms", "count");
   out += line;
-  for (const auto& stage : order_) {
+  for (const auto& stage : stages) {
     const TimingSummary s = summary(stage);
     std::snprintf(line, sizeof(line), "%-24s %10.2f %10.2f %10.2f %8zu\n", stage.c_str(), s.mean_ms, s.median_ms,
                   s.p95_ms, s.count);
@@ -63,6 +99,7 @@ std::string StageTimings::table() const {
 }
 
 void StageTimings::clear() {
+  std::lock_guard<std::mutex> lock(mutex_);
   samples_.clear();
   order_.clear();
 }
@@ -72,6 +109,7 @@ double ScopedTimer::stop() {
   stopped_ = true;
   elapsed_ms_ = elapsedMs(start_);
   if (timings_) timings_->add(stage_, elapsed_ms_);
+  if (frame_ms_) (*frame_ms_)[stage_] = elapsed_ms_;
   return elapsed_ms_;
 }
 

@@ -1,15 +1,10 @@
 #include "vitamin_e/fusion/dense_mapper.h"
 
-#include <chrono>
 #include <stdexcept>
 
-namespace vitamin_e::fusion {
+#include "vitamin_e/common/timing.h"
 
-namespace {
-double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
+namespace vitamin_e::fusion {
 
 meshing::FrameMesherConfig lenientMesherConfig() {
   meshing::FrameMesherConfig c;
@@ -38,16 +33,16 @@ DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, con
   DenseFrameStats stats;
   if (ids.size() != p_c.size()) throw std::invalid_argument("DenseMapper::addFrame: ids and points differ in size");
   if (static_cast<int>(p_c.size()) < config_.min_points || !T_w_c.matrix().allFinite()) return stats;
-  auto t0 = std::chrono::steady_clock::now();
+  auto t0 = TimingClock::now();
   meshing::FrameMesh mesh = mesher_.buildFromPoints(ids, p_c, K_);
-  stats.mesh_ms = msSince(t0);
+  stats.mesh_ms = elapsedMs(t0);
   if (!config_.denoise) {
     pruner_.prune(&mesh, K_);
   } else if (!mesh.triangles.empty()) {
-    t0 = std::chrono::steady_clock::now();
+    t0 = TimingClock::now();
     denoiser_.denoise(&mesh, K_);
     pruner_.prune(&mesh, K_);  // smoothing can open new depth jumps or flip triangles
-    stats.denoise_ms = msSince(t0);
+    stats.denoise_ms = elapsedMs(t0);
   }
   stats.vertices = mesh.vertices.size();
   stats.triangles = mesh.triangles.size();

@@ -1,7 +1,8 @@
 #include "vitamin_e/fusion/tsdf_integrator.h"
 
-#include <chrono>
 #include <stdexcept>
+
+#include "vitamin_e/common/timing.h"
 
 namespace vitamin_e::fusion {
 
@@ -25,12 +26,12 @@ TsdfIntegrator::~TsdfIntegrator() {
 }
 
 void TsdfIntegrator::integrateJob(const Job& job) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = TimingClock::now();
   {
     std::lock_guard<std::mutex> lock(volume_mutex_);
     volume_.integrate(job.mesh, job.T_w_c, job.K);
   }
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const double ms = elapsedMs(t0);
   std::lock_guard<std::mutex> lock(queue_mutex_);
   ++stats_.integrated;
   stats_.last_integration_ms = ms;

@@ -53,20 +53,6 @@ std::vector<std::string> reportStages(const StageTimings& timing) {
   return out;
 }
 
-std::string timingTable(const StageTimings& timing) {
-  std::string out;
-  char line[160];
-  std::snprintf(line, sizeof(line), "%-24s %10s %10s %10s %8s\n", "stage", "mean ms", "median ms", "p95 ms", "count");
-  out += line;
-  for (const std::string& s : reportStages(timing)) {
-    const TimingSummary t = timing.summary(s);
-    std::snprintf(line, sizeof(line), "%-24s %10.2f %10.2f %10.2f %8zu\n", s.c_str(), t.mean_ms, t.median_ms, t.p95_ms,
-                  t.count);
-    out += line;
-  }
-  return out;
-}
-
 std::string jsonString(const std::string& s) {
   std::string out = "\"";
   for (unsigned char c : s) {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "subspace_gn_impl.h"
+#include "vitamin_e/common/timing.h"
 
 namespace vitamin_e {
 namespace optimization {
@@ -357,7 +358,7 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   problem.validate();
   BaSummary summary;
   // time_ms covers setup and sweeps, not the final reporting (final cost, residuals).
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = TimingClock::now();
   detail::SubspaceGn solver(problem, options);
   summary.free_cameras = solver.freeCameras();
   summary.free_points = solver.freePoints();
@@ -367,7 +368,7 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   // linearization) instead of another pass over every observation.
   summary.initial_cost = solver.initialCost();
   summary.rejected_steps = solver.rejectedSteps();
-  summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  summary.time_ms = elapsedMs(start);
   const double final_cost = solver.finish(&summary.residual_px);
   summary.final_cost = final_cost;
   return summary;

@@ -4,7 +4,6 @@
 #include "vitamin_e/pipeline/system.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -44,14 +43,9 @@ System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
       relocalizer(config.relocalization, cam, config.pnp),
       map(cfg.map) {}
 
-void System::Impl::addTiming(const std::string& stage, double ms) {
-  std::lock_guard<std::mutex> lock(timings_mutex);
-  timings.add(stage, ms);
-}
-
 TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
   TrackedFrame f = front_end.track(image, timestamp, timestamp_text);
-  if (!f.skipped) addTiming("tracking", f.tracking_ms);
+  if (!f.skipped) timings.add("tracking", f.tracking_ms);
   return f;
 }
 
@@ -70,7 +64,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   const double tracking_ms = f.tracking_ms;
   FrameContext frame = contextOf(std::move(f));
 
-  const auto t_start = std::chrono::steady_clock::now();
+  const auto t_start = TimingClock::now();
   if (state == TrackingState::kTracking) {
     track(frame, &result);
   } else if (state == TrackingState::kRelocalizing) {
@@ -100,7 +94,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   result.relocalizations = counters.relocalizations;
   // total = the work of both stages for this frame (tracking + mapping).
   const double total = tracking_ms + elapsedMs(t_start);
-  addTiming("total", total);
+  timings.add("total", total);
   result.timing_ms["total"] = total;
   ++counters.frames_processed;
   return result;
@@ -124,7 +118,7 @@ void System::Impl::endTracks(const std::vector<std::uint64_t>& removed, FrameCon
 }
 
 void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
-  const auto t0 = std::chrono::steady_clock::now();
+  ScopedTimer timer(&timings, "init");
   state = TrackingState::kInitializing;
   result->state = TrackingState::kInitializing;
   if (localization_only) {  // a new map would be a change of the map
@@ -141,7 +135,6 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   InitAttempt attempt = initializer.addFrame(frame, anchor);
   if (!attempt.initialized) {
     result->message = std::move(attempt.message);
-    addTiming("init", elapsedMs(t0));
     return;
   }
   InitialMap& m = attempt.map;
@@ -177,7 +170,6 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   result->T_w_c = T_w_c;
   result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
                     std::to_string(m.parallax_deg) + " deg" + m.notes;
-  addTiming("init", elapsedMs(t0));
 }
 
 // Tracking failed at this frame: look for the camera in the map, or (when
@@ -207,7 +199,7 @@ void System::Impl::reinitialize(const std::string& why, FrameResult* result) {
 }
 
 void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
-  const auto t0 = std::chrono::steady_clock::now();
+  ScopedTimer timer(&timings, "relocalize");
   result->state = TrackingState::kRelocalizing;
   const Relocalization r = relocalizer.relocalize(frame.image, frame, map);
   if (r.ok && resume(frame, r.T_w_c, result)) {
@@ -215,7 +207,6 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
     result->message = "relocalized against keyframe " + std::to_string(r.keyframe) + " (" +
                       std::to_string(r.inliers) + " of " + std::to_string(r.matches) + " matches" +
                       (r.quarter_turns == 2 ? ", camera upside down" : "") + ")";
-    addTiming("relocalize", elapsedMs(t0));
     return;
   }
   // Frames too poor to initialize on (black, covered) do not use up the wait.
@@ -227,7 +218,6 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
   } else {
     result->message = "relocalizing: " + (r.ok ? std::string("the pose found did not hold") : r.why);
   }
-  addTiming("relocalize", elapsedMs(t0));
 }
 
 // Continues tracking from a relocalized pose: map points are handed to the
@@ -272,32 +262,24 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   }
   Eigen::Isometry3d T_w_c;
   {
-    const auto t0 = std::chrono::steady_clock::now();
+    ScopedTimer pose_timer(&timings, "pose", &result->timing_ms);
     // Accepted only when well constrained (enough inliers, and most of the
     // tracked map points agree): however many tracks a turn or a cut ended.
     const PoseEstimate pose = localizer.estimate(frame, motion.predict());
     if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
-    const double ms = elapsedMs(t0);
-    addTiming("pose", ms);
-    result->timing_ms["pose"] = ms;
+    pose_timer.stop();
     if (!pose.ok) {
       lose(frame, pose.why, true, result);
       return;
     }
     // Localized: new tracks where old map points project take them over.
-    const auto t1 = std::chrono::steady_clock::now();
+    ScopedTimer reuse_timer(&timings, "reuse", &result->timing_ms);
     T_w_c = pose.T_w_c;
     if (reuse.associate(frame, T_w_c, scene_depth, &map) > 0) frame.lookup(map);
-    const double reuse_ms = elapsedMs(t1);
-    addTiming("reuse", reuse_ms);
-    result->timing_ms["reuse"] = reuse_ms;
   }
   {
-    const auto t0 = std::chrono::steady_clock::now();
+    ScopedTimer timer(&timings, "ba", &result->timing_ms);
     endTracks(mapper.refineFrame(frame, &T_w_c, &map), frame);
-    const double ms = elapsedMs(t0);
-    addTiming("ba", ms);
-    result->timing_ms["ba"] = ms;
   }
   // A pose must be finite and must not jump: a step far beyond the scene depth
   // is a failure, not motion.
@@ -310,7 +292,7 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   motion.update(T_w_c);
   {
-    const auto t0 = std::chrono::steady_clock::now();
+    ScopedTimer timer(&timings, "map", &result->timing_ms);
     if (!localization_only && mapper.needKeyframe(frame, T_w_c, map)) {
       const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
       front_end.dropTracks(kf.removed);
@@ -326,9 +308,6 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
       if (l) depths.push_back((T_c_w * l->p_w).z());
     }
     if (depths.size() > 20) scene_depth = std::max(1e-6, upperMedian(depths));
-    const double ms = elapsedMs(t0);
-    addTiming("map", ms);
-    result->timing_ms["map"] = ms;
   }
   state = TrackingState::kTracking;
   result->state = TrackingState::kTracking;

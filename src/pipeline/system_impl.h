@@ -44,7 +44,6 @@ struct System::Impl {
   bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
-  void addTiming(const std::string& stage, double ms);
   // A loss is not given up for a new map (system_map_io.cpp).
   bool keepRelocalizing() const;
 
@@ -69,8 +68,7 @@ struct System::Impl {
   bool map_loaded = false;            // the map came from loadMap() (a loss is then never given up)
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
-  // both threads
-  std::mutex timings_mutex;
+  // both threads (StageTimings is thread-safe)
   StageTimings timings;
 };
 

@@ -99,7 +99,6 @@ void System::loadMap(const map::MapFileContents& c) {
   s.initializer.reset();
   s.motion.invalidate();
   s.scene_depth = c.scene_depth;
-  s.mapped_last_frame = 0;
   s.lost_frames = 0;
   s.initialized_once = true;  // a later new map (extend mode, after a loss) starts at the last pose and scale
   s.state = TrackingState::kRelocalizing;

@@ -1,6 +1,5 @@
 #include "vitamin_e/synth/sequence.h"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +10,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "vitamin_e/common/timing.h"
 #include "vitamin_e/synth/renderer.h"
 #include "vitamin_e/synth/street.h"
 
@@ -154,7 +154,6 @@ std::ofstream openOut(const fs::path& p) {
 SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& config,
                             const std::function<void(int, int)>& progress) {
   config.validate();
-  using Clock = std::chrono::steady_clock;
   SequenceStats stats;
   const fs::path out(out_dir), cam_dir = out / "mav0" / "cam0", img_dir = cam_dir / "data",
       gt_dir = out / "mav0" / "state_groundtruth_estimate0";
@@ -163,7 +162,7 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
   fs::create_directories(gt_dir, ec);
   if (!fs::is_directory(img_dir)) throw std::runtime_error(img_dir.string() + ": cannot create folder");
 
-  const auto t_scene = Clock::now();
+  const auto t_scene = TimingClock::now();
   const camera::Camera cam = sequenceCamera(config);
   const bool street = config.scene == "street";
   // One of the two: the room's figure-eight or the street's drive.
@@ -182,7 +181,7 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
   const Scene& scene = *scene_ptr;
   auto pose = [&](double t) { return street ? drive_path->T_w_c(t) : room_path->T_w_c(t); };
   const Renderer renderer(scene, cam, config.supersample);
-  stats.scene_build_s = std::chrono::duration<double>(Clock::now() - t_scene).count();
+  stats.scene_build_s = elapsedMs(t_scene) / 1000.0;
 
   openOut(cam_dir / "sensor.yaml") << eurocSensorYaml(cam, config.rate_hz);
   auto csv = openOut(cam_dir / "data.csv");
@@ -200,13 +199,13 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
     RenderOptions ro;
     ro.noise_sigma = config.noise_sigma;
     ro.noise_seed = mixSeed(config.seed, 0x401CE, static_cast<std::uint64_t>(i));
-    const auto t0 = Clock::now();
+    const auto t0 = TimingClock::now();
     const cv::Mat img = renderer.render(T_w_c, ro);
-    const auto t1 = Clock::now();
+    render_ms += elapsedMs(t0);
+    const auto t1 = TimingClock::now();
     const std::string name = std::to_string(ns) + ".png";
     if (!cv::imwrite((img_dir / name).string(), img)) throw std::runtime_error((img_dir / name).string() + ": cannot write");
-    write_ms += std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
-    render_ms += std::chrono::duration<double, std::milli>(t1 - t0).count();
+    write_ms += elapsedMs(t1);
 
     csv << ns << "," << name << "\n";
     Eigen::Quaterniond q(T_w_c.rotation());

@@ -2,12 +2,12 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
 
+#include "vitamin_e/common/timing.h"
 #include "vitamin_e/tracking/affine_flow.h"
 #include "vitamin_e/tracking/brief.h"
 #include "vitamin_e/tracking/curvature.h"
@@ -16,9 +16,6 @@
 
 namespace vitamin_e::tracking {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 struct Track {
   std::uint64_t id = 0;
@@ -362,13 +359,13 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   if (gray.cols < 2 * cfg.border_px + 3 || gray.rows < 2 * cfg.border_px + 3) {
     throw std::invalid_argument("DenseTracker::track: image smaller than 2*border_px+3");
   }
-  const auto t_all = Clock::now();
+  const auto t_all = TimingClock::now();
   TrackerFrame out;
   out.timestamp = timestamp;
   if (m.has_prev && gray.size() != m.size) reset();
   m.size = gray.size();
 
-  auto t = Clock::now();
+  auto t = TimingClock::now();
   double sigma = cfg.smoothing_sigma;
   if (cfg.adaptive_smoothing) {
     out.noise_ratio = noiseToGradientRatio(gray, &m.scratch);
@@ -387,10 +384,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
                      cv::BORDER_REFLECT101);
   }
   const float scale = robustCurvatureScale(m.kappa);
-  out.timing_ms["curvature"] = msSince(t);
+  out.timing_ms["curvature"] = elapsedMs(t);
 
   // Dominant flow from BRIEF matches on the shrunk image.
-  t = Clock::now();
+  t = TimingClock::now();
   extractSmallFeatures(gray, cfg, m.brief, &m.small);
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();  // no flow: identity
@@ -415,10 +412,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   }
   out.A = A;
   out.b = b;
-  out.timing_ms["flow"] = msSince(t);
+  out.timing_ms["flow"] = elapsedMs(t);
 
   // Extrema tracking.
-  t = Clock::now();
+  t = TimingClock::now();
   m.next_tracks.clear();
   if (m.owner.size() != gray.size()) {
     m.owner = cv::Mat::zeros(gray.size(), CV_32SC1);
@@ -498,10 +495,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   out.patch_gain = m.patch_gain;
   out.num_lost = static_cast<int>(m.tracks.size() - m.next_tracks.size());
   out.num_tracked = static_cast<int>(m.next_tracks.size());
-  out.timing_ms["track"] = msSince(t);
+  out.timing_ms["track"] = elapsedMs(t);
 
   // New extrema where the grid has room.
-  t = Clock::now();
+  t = TimingClock::now();
   const int r = cfg.nms_radius_px;
   auto markBlocked = [&](std::uint8_t v) {
     for (const Track& tr : m.next_tracks) {
@@ -517,7 +514,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   out.num_new = m.detect(gray, scale, &fresh);
   markBlocked(0);
   m.next_tracks.insert(m.next_tracks.end(), fresh.begin(), fresh.end());
-  out.timing_ms["detect"] = msSince(t);
+  out.timing_ms["detect"] = elapsedMs(t);
 
   const float inv_scale = scale > 0.f ? 1.f / scale : 0.f;
   out.points.reserve(m.next_tracks.size());
@@ -539,7 +536,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   std::swap(m.prev_small, m.small);
   m.prev_scale = scale;
   m.has_prev = true;
-  out.timing_ms["total"] = msSince(t_all);
+  out.timing_ms["total"] = elapsedMs(t_all);
   return out;
 }
 

@@ -2,8 +2,9 @@
 //   Pipeline.*   (pipeline.test)    bag -> tracking + meshing nodelets in one manager
 //   TwoProcess.* (two_process.test) tracking_node and tsdf_meshing_node, two processes
 //   BadInput.*   (bad_input.test)   wrong encoding / size / stamp: errors logged, no crash
-//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~export_points / ~save_map written when the nodelet unloads
+//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~map_file (the PLY export) written when the nodelet unloads
 //   MapFile.*    (map_file.test, test_ros_map_file.cpp) ~save_map / ~load_map / ~localization_only
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -64,31 +65,59 @@ void resumePlayer() {
 
 std::size_t framesProcessed(const Statuses& s) { return s.empty() ? 0 : s.back()->frames_processed; }
 
+// The bag of pipeline.test played into the nodelets, once per process, by
+// whichever Pipeline test runs first: each test sees the whole run, and none
+// depends on another having run before it (--gtest_filter, shuffling).
+struct BagRun {
+  explicit BagRun(ros::NodeHandle& nh)
+      : tf(nh, "/tf", 1000),
+        points(nh, "/tracking/points"),
+        mesh(nh, "/tsdf_meshing/mesh"),
+        status(nh, "/tracking/status", 1000) {}
+  Watcher<tf2_msgs::TFMessage> tf;
+  Watcher<sensor_msgs::PointCloud2> points;
+  Watcher<visualization_msgs::MarkerArray> mesh;
+  Watcher<vitamin_e::TrackingStatus> status;
+};
+
+void playBagOnce(BagRun** out) {
+  static BagRun* run = nullptr;  // never deleted: its subscribers must outlive the tests, not ros::shutdown
+  static bool failed = false;
+  ASSERT_FALSE(failed) << "the bag run failed in an earlier test";
+  if (run) {
+    *out = run;
+    return;
+  }
+  failed = true;
+  ros::NodeHandle nh;
+  const int frames = std::stoi(param("frames", "60"));
+  run = new BagRun(nh);
+  ASSERT_TRUE(ros::service::waitForService("/tracking/save_trajectory", ros::Duration(30.0)));
+  ASSERT_TRUE(run->status.waitForPublisher(30.0));
+  ASSERT_TRUE(run->points.waitForPublisher(30.0));
+  ASSERT_TRUE(run->mesh.waitForPublisher(30.0));
+  resumePlayer();
+  // Every frame of the bag is processed (~process_all_frames), however slow the SLAM.
+  ASSERT_TRUE(run->status.waitFor(
+      [&](const Statuses& s) { return static_cast<int>(framesProcessed(s)) >= frames; }, 150.0))
+      << "frames processed: " << framesProcessed(run->status.messages()) << " of " << frames;
+  failed = false;
+  *out = run;
+}
+
 }  // namespace
 
 // (a) The bag played into the nodelets of one manager: tf, points and mesh arrive.
 TEST(Pipeline, BagIntoNodelets) {
-  ros::NodeHandle nh;
-  const int frames = std::stoi(param("frames", "60"));
-  Watcher<tf2_msgs::TFMessage> tf(nh, "/tf", 1000);
-  Watcher<sensor_msgs::PointCloud2> points(nh, "/tracking/points");
-  Watcher<visualization_msgs::MarkerArray> mesh(nh, "/tsdf_meshing/mesh");
-  Watcher<vitamin_e::TrackingStatus> status(nh, "/tracking/status", 1000);
-  ASSERT_TRUE(ros::service::waitForService("/tracking/save_trajectory", ros::Duration(30.0)));
-  ASSERT_TRUE(status.waitForPublisher(30.0));
-  ASSERT_TRUE(points.waitForPublisher(30.0));
-  ASSERT_TRUE(mesh.waitForPublisher(30.0));
-  resumePlayer();
-
-  // Every frame of the bag is processed (~process_all_frames), however slow the SLAM.
-  EXPECT_TRUE(status.waitFor([&](const Statuses& s) { return static_cast<int>(framesProcessed(s)) >= frames; },
-                             150.0))
-      << "frames processed: " << framesProcessed(status.messages()) << " of " << frames;
-  const auto s = status.messages();
+  BagRun* run = nullptr;
+  ASSERT_NO_FATAL_FAILURE(playBagOnce(&run));
+  const auto s = run->status.messages();
   ASSERT_FALSE(s.empty());
-  EXPECT_GT(s.back()->frames_tracked, 0u) << "last status: " << s.back()->state_name << " " << s.back()->message;
+  std::size_t tracked = 0;  // the most of any status (SavedTrajectoryAte may have reset the tracker since)
+  for (const auto& m : s) tracked = std::max<std::size_t>(tracked, m->frames_tracked);
+  EXPECT_GT(tracked, 0u) << "last status: " << s.back()->state_name << " " << s.back()->message;
 
-  EXPECT_TRUE(tf.waitFor(
+  EXPECT_TRUE(run->tf.waitFor(
       [](const auto& msgs) {
         for (const auto& m : msgs)
           for (const auto& t : m->transforms)
@@ -97,7 +126,7 @@ TEST(Pipeline, BagIntoNodelets) {
       },
       10.0))
       << "no map -> cam0 on /tf";
-  EXPECT_TRUE(points.waitFor(
+  EXPECT_TRUE(run->points.waitFor(
       [](const auto& msgs) {
         for (const auto& m : msgs)
           if (m->width * m->height > 0 && m->header.frame_id == "map") return true;
@@ -105,12 +134,16 @@ TEST(Pipeline, BagIntoNodelets) {
       },
       10.0))
       << "no non-empty cloud on /tracking/points";
-  EXPECT_TRUE(mesh.waitFor(hasTriangles, 20.0)) << "no TRIANGLE_LIST marker on /tsdf_meshing/mesh";
+  EXPECT_TRUE(run->mesh.waitFor(hasTriangles, 20.0)) << "no TRIANGLE_LIST marker on /tsdf_meshing/mesh";
 }
 
 // The trajectory saved through the service is close to the ground truth (after
-// Sim(3) alignment). The map and the mesh can be saved too.
+// Sim(3) alignment), with the bounds of the offline test on the same kind of
+// render (test_system_synthetic: ATE RMSE < 1 cm, >= 80 % of the frames). The
+// map and the mesh can be saved too.
 TEST(Pipeline, SavedTrajectoryAte) {
+  BagRun* run = nullptr;
+  ASSERT_NO_FATAL_FAILURE(playBagOnce(&run));
   const std::string out = param("output_dir", "/tmp");
   vitamin_e::SaveFile save;
   save.request.path = out + "/pipeline_trajectory.txt";
@@ -137,8 +170,8 @@ TEST(Pipeline, SavedTrajectoryAte) {
   ROS_INFO_STREAM("saved trajectory vs ground truth:\n" << eval::summary(result, config));
   RecordProperty("ate_rmse_m", std::to_string(result.ate.rmse));
   RecordProperty("success_rate", std::to_string(result.success_rate));
-  EXPECT_LT(result.ate.rmse, std::stod(param("max_ate_m", "0.05")));
-  EXPECT_GE(result.success_rate, std::stod(param("min_success_rate", "0.5")));
+  EXPECT_LT(result.ate.rmse, std::stod(param("max_ate_m", "0.01")));
+  EXPECT_GE(result.success_rate, std::stod(param("min_success_rate", "0.8")));
 
   std_srvs::Trigger reset;
   ASSERT_TRUE(ros::service::call("/tracking/reset", reset));
@@ -255,11 +288,19 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
   image_pub_.publish(image(22.0, "mono16", 160, 120, 2));
   EXPECT_TRUE(processed(n0 + 2)) << "mono16 frame not processed";
 
-  ros::WallDuration(2.2).sleep();  // the errors are throttled per call site (2 s)
-  image_pub_.publish(image(23.0, "bayer_rggb8", 160, 120, 1));
-  EXPECT_TRUE(vitamin_e_test::waitForLogError(rosout, "unsupported image encoding 'bayer_rggb8'", 10.0));
-  image_pub_.publish(image(22.0, "mono8", 160, 120, 1));  // the same stamp as the mono16 frame
-  EXPECT_TRUE(vitamin_e_test::waitForLogError(rosout, "does not increase", 10.0));
+  // The errors are throttled per call site (2 s) and the previous test logged
+  // them too: the bad frame is sent again until its error is logged.
+  auto publishUntilLogged = [&](const sensor_msgs::Image& img, const std::string& error) {
+    const auto deadline = ros::WallTime::now() + ros::WallDuration(10.0);
+    do {
+      image_pub_.publish(img);
+      if (vitamin_e_test::waitForLogError(rosout, error, 0.25)) return true;
+    } while (ros::WallTime::now() < deadline);
+    return false;
+  };
+  EXPECT_TRUE(publishUntilLogged(image(23.0, "bayer_rggb8", 160, 120, 1), "unsupported image encoding 'bayer_rggb8'"));
+  // The same stamp as the mono16 frame.
+  EXPECT_TRUE(publishUntilLogged(image(22.0, "mono8", 160, 120, 1), "does not increase"));
 
   image_pub_.publish(image(1.8e9, "mono8", 160, 120, 1));  // wall-clock-sized stamp
   EXPECT_TRUE(processed(n0 + 3)) << "a frame with a wall-clock stamp after bag stamps was not processed";

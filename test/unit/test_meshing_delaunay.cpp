@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <map>
 #include <random>
 
@@ -89,16 +88,14 @@ TEST(Delaunay, DegenerateInputs) {
   EXPECT_EQ(tris.size(), 2u);
 }
 
-TEST(Delaunay, TenThousandPointsAreFast) {
+// Timing is measured by bench_meshing_delaunay (./scripts/bench_delaunay.sh), not here.
+TEST(Delaunay, TenThousandPoints) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   std::vector<Vector2d> p(10000);
   for (auto& q : p) q = {752.0 * U(rng), 480.0 * U(rng)};
-  const auto t0 = std::chrono::steady_clock::now();
   const auto tris = delaunayTriangulate(p);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(static_cast<int>(tris.size()), 2 * 10000 - 2 - hullBoundaryCount(p));
-  EXPECT_LT(ms, 200.0);  // ~5 ms unloaded; generous for a loaded machine
   expectManifold(tris);
 }
 

@@ -101,8 +101,11 @@ double frameTime(int i) { return 100.0 + i / kRate; }
 // Every published pose finite and a rotation; trajectory in strict time order,
 // finite, and without a jump: no step between consecutive poses longer than
 // max_step (map units; the first map has median depth 1, the camera moves
-// ~0.01 units per frame).
-void expectSaneOutput(const SlamRun& run, double max_step = 0.3) {
+// ~0.01 units per frame). A step into the first pose at or after
+// unbounded_step_at (a time) is not bounded: a new map that is not anchored at
+// the old one (System::reset) starts there.
+void expectSaneOutput(const SlamRun& run, double max_step = 0.3,
+                      double unbounded_step_at = std::numeric_limits<double>::quiet_NaN()) {
   for (const FrameResult& r : run.results) {
     if (!r.pose_valid) continue;
     EXPECT_TRUE(r.T_w_c.matrix().allFinite()) << "frame " << r.frame_index;
@@ -120,6 +123,7 @@ void expectSaneOutput(const SlamRun& run, double max_step = 0.3) {
     ASSERT_TRUE(std::isfinite(traj[i].timestamp));
     if (i == 0) continue;
     EXPECT_GT(traj[i].timestamp, traj[i - 1].timestamp) << "trajectory pose " << i;
+    if (traj[i - 1].timestamp < unbounded_step_at && traj[i].timestamp >= unbounded_step_at) continue;
     const double step = (traj[i].T_w_c.translation() - traj[i - 1].T_w_c.translation()).norm();
     EXPECT_LT(step, max_step) << "trajectory jumps between t=" << traj[i - 1].timestamp << " and t="
                               << traj[i].timestamp;
@@ -402,13 +406,28 @@ TEST(Robustness, ResetKeepsTheTrajectoryAndReinitializes) {
   for (int i = 0; i < 50; ++i) run.feed(w.frame(i), frameTime(i));
   ASSERT_GE(run.firstValid(), 0) << describe(run);
   const std::size_t before = run.system.trajectory().size();
+  // Map points with an id are the active map; the archive (id 0) stays for export.
+  auto count = [&](bool active) {
+    std::size_t n = 0;
+    for (const auto& p : run.system.mapPoints()) n += (p.id != 0) == active ? 1 : 0;
+    return n;
+  };
+  const std::size_t archived = count(false);
+  ASSERT_GT(count(true), 100u) << "no map before the reset";
   run.system.reset();
-  EXPECT_TRUE(run.system.mapPoints().empty() || run.system.mapPoints().size() < 100000);
+  EXPECT_EQ(count(true), 0u) << "the active map survived reset()";
+  EXPECT_EQ(count(false), archived) << "reset() changed the archive";
   EXPECT_EQ(run.system.trajectory().size(), before);
   const std::size_t n = run.results.size();
   for (int i = 50; i < 110; ++i) run.feed(w.frame(i), frameTime(i));
+  // Frames after the reset initialize a new map from scratch.
+  EXPECT_EQ(run.results[n].state, TrackingState::kInitializing) << run.results[n].message;
+  EXPECT_EQ(run.results[n].map_size, 0u);
+  EXPECT_FALSE(run.results[n].pose_valid);
   EXPECT_GE(run.firstValid(n), 0) << describe(run);
-  expectSaneOutput(run, 2.0);  // after reset() the new map is not anchored at the old one
+  // The step bound of every other test, except into the first pose of the new
+  // map, which is not anchored at the old one.
+  expectSaneOutput(run, 0.3, frameTime(50));
 }
 
 // ---------------------------------------------------------------- config files

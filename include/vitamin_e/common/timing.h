@@ -1,13 +1,27 @@
 #pragma once
-// Per-stage wall-clock timing: a ScopedTimer adds its duration to a named stage of
-// StageTimings; summary() gives mean/median/p95 per stage, for stats.json and the
-// timing table printed at the end of a run.
+// The one timing facility of the project: elapsedMs() (wall-clock ms since a
+// steady_clock time point), processCpuMs() / threadCpuMs() (CPU time, which
+// stays meaningful on a loaded machine), ScopedTimer (adds its duration
+// to a named stage of StageTimings) and StageTimings (samples per stage,
+// mean/median/p95, the timing table printed at the end of a run).
 #include <chrono>
 #include <map>
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vitamin_e {
+
+using TimingClock = std::chrono::steady_clock;
+
+inline double elapsedMs(TimingClock::time_point since) {
+  return std::chrono::duration<double, std::milli>(TimingClock::now() - since).count();
+}
+
+// CPU time used so far [ms] by all threads of the process, or by the calling thread.
+double processCpuMs();
+double threadCpuMs();
 
 struct TimingSummary {
   double mean_ms = 0.0;
@@ -21,40 +35,51 @@ double percentile(std::vector<double> values, double pct);
 // The upper median (element n/2 of the sorted sample, no interpolation); 0 if empty.
 double upperMedian(std::vector<double> values);
 
+// Thread-safe: stages may be added from several threads (the pipelined system
+// tracks and maps on two); readers get copies.
 class StageTimings {
  public:
+  StageTimings() = default;
+  StageTimings(const StageTimings& other);
+  StageTimings& operator=(const StageTimings& other);
+
   void add(const std::string& stage, double ms);
   // Stages in first-seen order.
-  const std::vector<std::string>& stages() const { return order_; }
+  std::vector<std::string> stages() const;
   TimingSummary summary(const std::string& stage) const;
-  const std::vector<double>& samples(const std::string& stage) const;
-  // A readable table: stage, mean, median, p95, count.
+  std::vector<double> samples(const std::string& stage) const;
+  // A readable table: stage, mean, median, p95, count; of every stage in
+  // first-seen order, or of the given stages in that order.
   std::string table() const;
+  std::string table(const std::vector<std::string>& stages) const;
   void clear();
 
  private:
+  mutable std::mutex mutex_;
   std::map<std::string, std::vector<double>> samples_;
   std::vector<std::string> order_;
 };
 
+// Measures from construction to stop() (or destruction) and adds the duration
+// to `stage` of `timings` and, when given, to (*frame_ms)[stage] (a frame's
+// own times, e.g. FrameResult::timing_ms).
 class ScopedTimer {
  public:
-  ScopedTimer(StageTimings* timings, std::string stage)
-      : timings_(timings), stage_(std::move(stage)), start_(std::chrono::steady_clock::now()) {}
+  ScopedTimer(StageTimings* timings, std::string stage, std::map<std::string, double>* frame_ms = nullptr)
+      : timings_(timings), frame_ms_(frame_ms), stage_(std::move(stage)), start_(TimingClock::now()) {}
   ~ScopedTimer() { stop(); }
+  ScopedTimer(const ScopedTimer&) = delete;
+  ScopedTimer& operator=(const ScopedTimer&) = delete;
   // Records now; later calls do nothing. Returns the elapsed milliseconds.
   double stop();
 
  private:
   StageTimings* timings_;
+  std::map<std::string, double>* frame_ms_;
   std::string stage_;
-  std::chrono::steady_clock::time_point start_;
+  TimingClock::time_point start_;
   bool stopped_ = false;
   double elapsed_ms_ = 0.0;
 };
-
-inline double elapsedMs(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
-}
 
 }  // namespace vitamin_e

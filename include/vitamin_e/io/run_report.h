@@ -45,11 +45,9 @@ struct RunStats {
   }
 };
 
-// Stage names for reports: the system's stages in first-seen order, then
-// "image_load", then "total".
+// Stage names for reports (the order of timing.table(reportStages(timing))):
+// the system's stages in first-seen order, then "image_load", then "total".
 std::vector<std::string> reportStages(const StageTimings& timing);
-// Readable table (stage, mean, median, p95, count) in reportStages() order.
-std::string timingTable(const StageTimings& timing);
 
 // stats.json: frames, tracked_frames, success_rate, init_retries,
 // points_per_frame {mean, median}, timing_ms {stage: {mean, median, p95}}, peak_rss_mb, ...

@@ -49,7 +49,7 @@ namespace optimization {
 
 struct BaOptions {
   double robust_sigma_px = 2.0;  // Geman-McClure sigma
-  int max_sweeps = 20;
+  int max_sweeps = 20;           // linearizations at most (the SLAM sets it per solve: pipeline.ba_*_sweeps)
   double tolerance = 1e-6;       // relative cost change of an accepted sweep
   int threads = 1;               // threads for the loops over points (see above)
   bool use_schur = true;         // eliminate the points inside each camera update

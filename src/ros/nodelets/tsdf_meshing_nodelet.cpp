@@ -3,10 +3,10 @@
 // path as the offline runner: Delaunay mesh, NLTGV smoothing, pruning, TSDF
 // fusion on its own thread); the zero level set is published every
 // ~publish_period as a chunked MarkerArray of TRIANGLE_LISTs. The dense settings
-// come from the "dense" section of ~config_file (the SLAM config, map units),
-// each overridable by a private parameter of the same name. ~load_tsdf: the TSDF
-// of an earlier run (in the same map) fused into from the start, its mesh
-// published at once; ~save_tsdf: written on shutdown (and by ~save_tsdf).
+// come from the "dense" section of ~config_file (the SLAM config, map units)
+// alone, as in the offline runner. ~load_tsdf: the TSDF of an earlier run (in
+// the same map) fused into from the start, its mesh published at once;
+// ~save_tsdf: written on shutdown (and by the ~save_tsdf service).
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -49,46 +49,60 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   }
 
  private:
+  // Every ROS parameter of the nodelet, read once here. The reconstruction
+  // itself is configured by the "dense" section of ~config_file only (the same
+  // keys and meaning as vitamin_e_run --config; docs/CONFIG.md).
+  struct Params {
+    std::string map_frame;
+    std::string mesh_file;
+    std::string config_file;
+    std::string load_tsdf, save_tsdf;
+    int queue_size = 100;
+  };
+  Params readParams(ros::NodeHandle& pnh) {
+    Params p;
+    pnh.param("map_frame", p.map_frame, p.map_frame);
+    pnh.param("mesh_file", p.mesh_file, p.mesh_file);
+    pnh.param("config_file", p.config_file, p.config_file);
+    pnh.param("queue_size", p.queue_size, p.queue_size);
+    pnh.param("load_tsdf", p.load_tsdf, p.load_tsdf);
+    pnh.param("save_tsdf", p.save_tsdf, p.save_tsdf);
+    // Parameters that overrode the yaml before: say where they went instead of ignoring them silently.
+    for (const char* old : {"denoise", "voxel_size", "truncation", "max_weight", "min_depth", "max_depth",
+                            "raster_downscale", "max_edge_px", "max_normal_angle_deg", "max_inv_depth_jump"}) {
+      if (pnh.hasParam(old)) {
+        NODELET_ERROR("~%s is not read: set dense.%s in ~config_file (docs/CONFIG.md)", old, old);
+      }
+    }
+    return p;
+  }
+
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    pnh.param<std::string>("map_frame", map_frame_, "");
-    pnh.param<std::string>("mesh_file", mesh_file_, "");
-    pnh.param<std::string>("load_tsdf", load_tsdf_, "");
-    pnh.param<std::string>("save_tsdf", save_tsdf_, "");
-    std::string config_file;
-    pnh.param<std::string>("config_file", config_file, "");
+    const Params params = readParams(pnh);
+    map_frame_ = params.map_frame;
+    mesh_file_ = params.mesh_file;
+    load_tsdf_ = params.load_tsdf;
+    save_tsdf_ = params.save_tsdf;
     try {
-      dense_config_ = config_file.empty() ? vitamin_e::pipeline::defaultDenseConfig()
-                                          : vitamin_e::pipeline::loadSystemConfig(config_file).dense;
+      const vitamin_e::pipeline::SystemConfig config = params.config_file.empty()
+                                                           ? vitamin_e::pipeline::SystemConfig{}
+                                                           : vitamin_e::pipeline::loadSystemConfig(params.config_file);
+      if (!config.dense_enabled) {
+        NODELET_WARN("dense.enabled is false in %s: nothing is fused (no subscription)", params.config_file.c_str());
+        return;
+      }
+      dense_config_ = config.dense;
+      dense_config_.validate();
     } catch (const std::exception& e) {
       NODELET_FATAL("%s (no subscription)", e.what());
-      return;
-    }
-    fusion::DenseMapperConfig& d = dense_config_;
-    fusion::TsdfConfig& tsdf = d.integrator.tsdf;
-    pnh.param("denoise", d.denoise, d.denoise);
-    pnh.param("voxel_size", tsdf.voxel_size, tsdf.voxel_size);
-    pnh.param("truncation", tsdf.truncation, tsdf.truncation);
-    pnh.param("max_weight", tsdf.max_weight, tsdf.max_weight);
-    pnh.param("min_depth", tsdf.min_depth, tsdf.min_depth);
-    pnh.param("max_depth", tsdf.max_depth, tsdf.max_depth);
-    pnh.param("raster_downscale", tsdf.raster_downscale, tsdf.raster_downscale);
-    pnh.param("max_edge_px", d.prune.max_edge_px, d.prune.max_edge_px);
-    pnh.param("max_normal_angle_deg", d.prune.max_normal_angle_deg, d.prune.max_normal_angle_deg);
-    pnh.param("max_inv_depth_jump", d.prune.max_inv_depth_jump, d.prune.max_inv_depth_jump);
-    d.mesher.max_depth = std::min(d.mesher.max_depth, tsdf.max_depth);
-    d.prune.max_depth = std::min(d.prune.max_depth, tsdf.max_depth);
-    try {
-      d.validate();
-    } catch (const std::exception& e) {
-      NODELET_FATAL("bad meshing parameter: %s (no subscription)", e.what());
       return;
     }
     if (!load_tsdf_.empty()) {
       // Read now (a bad file is fatal before subscribing); handed to the
       // DenseMapper made at the first frame.
-      loaded_tsdf_ = std::make_unique<fusion::TsdfVolume>(tsdf);
+      loaded_tsdf_ = std::make_unique<fusion::TsdfVolume>(dense_config_.integrator.tsdf);
       try {
         loaded_tsdf_->load(load_tsdf_);
       } catch (const std::exception& e) {
@@ -98,8 +112,9 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
       NODELET_INFO("~load_tsdf %s: %zu blocks", load_tsdf_.c_str(), loaded_tsdf_->numBlocks());
     }
     config_ok_ = true;
+    const fusion::TsdfConfig& tsdf = dense_config_.integrator.tsdf;
     NODELET_INFO("TSDF voxel %.3f, truncation %.3f, depth [%.2f, %.2f] (map units), NLTGV %s", tsdf.voxel_size,
-                 tsdf.truncation, tsdf.min_depth, tsdf.max_depth, d.denoise ? "on" : "off");
+                 tsdf.truncation, tsdf.min_depth, tsdf.max_depth, dense_config_.denoise ? "on" : "off");
 
     mesh_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("mesh", 1, true);
     save_srv_ = pnh.advertiseService("save_mesh", &TsdfMeshingNodelet::saveMeshService, this);
@@ -112,9 +127,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
       std::lock_guard<std::mutex> lock(mutex_);
       publishLoadedMesh();
     }
-    int queue_size = 100;
-    pnh.param("queue_size", queue_size, queue_size);
-    frame_sub_ = nh.subscribe("frame", static_cast<uint32_t>(std::max(1, queue_size)),
+    frame_sub_ = nh.subscribe("frame", static_cast<uint32_t>(std::max(1, params.queue_size)),
                               &TsdfMeshingNodelet::frameCallback, this);
     NODELET_INFO("fusing frames from %s", frame_sub_.getTopic().c_str());
   }
@@ -262,7 +275,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     const std::string path = req.path.empty() ? mesh_file_ : req.path;
     if (!dense_ || path.empty()) {
       res.success = false;
-      res.message = !config_ok_ ? "no TSDF (bad parameters)"
+      res.message = !config_ok_ ? "no TSDF (bad configuration or dense.enabled false)"
                     : !dense_   ? "no frame fused yet"
                                 : "no path given and ~mesh_file not set";
       return true;
