@@ -2,7 +2,7 @@
 // (associate by timestamp, Sim(3) Umeyama alignment, ATE, RPE, success rate).
 //   vitamin_e_evaluate TRAJ GT [--frames N] [--max-dt S] [--body-to-camera YAML]
 //                      [--se3] [--rpe-delta S] [--kitti-times FILE] [--json] [--aligned-out FILE]
-//                      [--gt-out FILE] [--errors-out FILE]
+//                      [--gt-out FILE] [--errors-out FILE] [--alignment-from TRAJ0 [--alignment-gt GT0]]
 // TRAJ/GT: TUM, EuRoC csv or KITTI poses (auto-detected); GT may be a dataset
 // folder. Prints a summary, then the JSON result as the last line (--json: JSON only).
 // Bad input: one "error: ..." line on stderr, exit 2.
@@ -24,7 +24,7 @@ namespace {
 const char* kUsage =
     "usage: vitamin_e_evaluate TRAJ GT [--frames N] [--max-dt S] [--body-to-camera SENSOR_YAML]\n"
     "                          [--se3] [--rpe-delta S] [--kitti-times FILE] [--json] [--aligned-out FILE]\n"
-    "                          [--gt-out FILE] [--errors-out FILE]\n"
+    "                          [--gt-out FILE] [--errors-out FILE] [--alignment-from TRAJ0 [--alignment-gt GT0]]\n"
     "  TRAJ, GT          trajectory files: TUM 't tx ty tz qx qy qz qw', EuRoC ground-truth csv,\n"
     "                    or KITTI poses (auto-detected); GT may be a dataset folder\n"
     "  --frames N        number of input frames for the success rate (default: estimate poses)\n"
@@ -37,7 +37,10 @@ const char* kUsage =
     "  --json            print only the JSON line\n"
     "  --aligned-out F   write the aligned estimate (TUM) to F\n"
     "  --gt-out F        write the ground truth as used (TUM, camera poses) to F\n"
-    "  --errors-out F    write 't_estimate position_error_m' per matched pose to F\n";
+    "  --errors-out F    write 't_estimate position_error_m' per matched pose to F\n"
+    "  --alignment-from TRAJ0  do not fit an alignment: apply the one fitted on TRAJ0 (e.g. the run that\n"
+    "                    made a map TRAJ was localized in, same world frame) against GT0, unchanged\n"
+    "  --alignment-gt GT0  ground truth for TRAJ0 (default: GT)\n";
 
 using vitamin_e::cli::fail;
 using vitamin_e::cli::parseDouble;
@@ -47,7 +50,7 @@ using vitamin_e::cli::parseDouble;
 int main(int argc, char** argv) {
   std::vector<std::string> positional;
   ve::EvalConfig cfg;
-  std::string body_to_camera, aligned_out, gt_out, errors_out;
+  std::string body_to_camera, aligned_out, gt_out, errors_out, alignment_from, alignment_gt;
   ve::ReadOptions gt_options;
   bool json_only = false;
   for (int i = 1; i < argc; ++i) {
@@ -77,6 +80,10 @@ int main(int argc, char** argv) {
       gt_out = next();
     } else if (a == "--errors-out") {
       errors_out = next();
+    } else if (a == "--alignment-from") {
+      alignment_from = next();
+    } else if (a == "--alignment-gt") {
+      alignment_gt = next();
     } else if (a == "--se3") {
       cfg.align_scale = false;
     } else if (a == "--json") {
@@ -88,6 +95,7 @@ int main(int argc, char** argv) {
     }
   }
   if (positional.size() != 2) fail("expected TRAJ and GT (see --help)");
+  if (!alignment_gt.empty() && alignment_from.empty()) fail("--alignment-gt needs --alignment-from");
   try {
     cfg.validate();
   } catch (const std::exception& e) {
@@ -97,17 +105,40 @@ int main(int argc, char** argv) {
   try {
     const ve::Trajectory est = ve::readTrajectory(positional[0]);
     if (est.empty()) fail(positional[0] + ": empty trajectory (no poses)");
-    const std::string gt_path = ve::resolveTrajectoryPath(positional[1]);
-    ve::Trajectory gt = ve::readTrajectory(gt_path, gt_options);
-    if (gt.empty()) fail(gt_path + ": empty ground truth (no poses)");
-    // EuRoC ground truth is the body (IMU) pose: use the dataset's own T_BS.
-    const std::string euroc_suffix = "state_groundtruth_estimate0/data.csv";
-    if (body_to_camera.empty() && gt_path.size() > euroc_suffix.size() &&
-        gt_path.compare(gt_path.size() - euroc_suffix.size(), euroc_suffix.size(), euroc_suffix) == 0) {
-      const std::string yaml = gt_path.substr(0, gt_path.size() - euroc_suffix.size()) + "cam0/sensor.yaml";
-      if (std::ifstream(yaml).good()) body_to_camera = yaml;
+    // Ground truth as camera poses: EuRoC ground truth is the body (IMU) pose,
+    // turned into the camera's with the dataset's own T_BS.
+    const std::string forced_body_to_camera = body_to_camera;
+    std::string gt_path;
+    auto readGroundTruth = [&](const std::string& arg) {
+      const std::string path = ve::resolveTrajectoryPath(arg);
+      ve::Trajectory gt = ve::readTrajectory(path, gt_options);
+      if (gt.empty()) fail(path + ": empty ground truth (no poses)");
+      std::string yaml = forced_body_to_camera;
+      const std::string euroc_suffix = "state_groundtruth_estimate0/data.csv";
+      if (yaml.empty() && path.size() > euroc_suffix.size() &&
+          path.compare(path.size() - euroc_suffix.size(), euroc_suffix.size(), euroc_suffix) == 0) {
+        const std::string candidate = path.substr(0, path.size() - euroc_suffix.size()) + "cam0/sensor.yaml";
+        if (std::ifstream(candidate).good()) yaml = candidate;
+      }
+      if (!yaml.empty()) gt = ve::applyBodyToCamera(gt, ve::loadBodyToCamera(yaml));
+      body_to_camera = yaml;
+      gt_path = path;
+      return gt;
+    };
+    if (!alignment_from.empty()) {
+      const ve::Trajectory est0 = ve::readTrajectory(alignment_from);
+      if (est0.empty()) fail(alignment_from + ": empty trajectory (no poses)");
+      const ve::Trajectory gt0 = readGroundTruth(alignment_gt.empty() ? positional[1] : alignment_gt);
+      ve::EvalConfig cfg0 = cfg;
+      cfg0.frames = 0;
+      const ve::EvalResult r0 = ve::evaluate(est0, gt0, cfg0);
+      cfg.given_alignment = r0.alignment;
+      if (!json_only) {
+        std::cout << "alignment fitted on " << alignment_from << " against " << gt_path << " (ATE "
+                  << 100.0 * r0.ate.rmse << " cm over " << r0.matched << " poses), applied unchanged\n";
+      }
     }
-    if (!body_to_camera.empty()) gt = ve::applyBodyToCamera(gt, ve::loadBodyToCamera(body_to_camera));
+    const ve::Trajectory gt = readGroundTruth(positional[1]);
     const ve::EvalResult r = ve::evaluate(est, gt, cfg);
     if (!aligned_out.empty()) ve::writeTum(aligned_out, r.aligned);
     if (!gt_out.empty()) ve::writeTum(gt_out, gt);

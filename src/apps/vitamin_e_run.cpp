@@ -1,10 +1,13 @@
 // vitamin_e_run: runs VITAMIN-E SLAM offline over a dataset, as fast as possible.
 //   vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]
 //                 [--max-frames N] [--start-frame N] [--quiet] [--check]
+//                 [--load-map FILE [--localization-only]] [--save-map FILE]
+//                 [--load-tsdf FILE] [--save-tsdf FILE]
 // PATH: EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder, KITTI odometry
 // folder, or a .bag (ROS builds). Writes DIR/trajectory.txt (TUM, T_w_c),
-// DIR/stats.json and DIR/points.ply. SIGINT/SIGTERM stop after the current frame
-// and still write everything. Bad input: one "error: ..." line, exit code 2.
+// DIR/stats.json and DIR/points.ply (and the map / TSDF files asked for).
+// SIGINT/SIGTERM stop after the current frame and still write everything. Bad
+// input (a damaged or foreign map file too): one "error: ..." line, exit code 2.
 #include <signal.h>
 #include <unistd.h>
 
@@ -23,6 +26,7 @@
 #include "vitamin_e/io/dataset.h"
 #include "vitamin_e/io/run_report.h"
 #include "vitamin_e/fusion/dense_mapper.h"
+#include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/system.h"
 #ifdef VITAMIN_E_WITH_ROS
@@ -38,6 +42,8 @@ namespace {
 const char* kUsage =
     "usage: vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]\n"
     "                     [--max-frames N] [--start-frame N] [--quiet] [--check]\n"
+    "                     [--load-map FILE [--localization-only]] [--save-map FILE]\n"
+    "                     [--load-tsdf FILE] [--save-tsdf FILE]\n"
     "  --dataset PATH   EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder (rgb.txt),\n"
     "                   KITTI odometry folder (image_0/ or image_l/, calib.txt) or a .bag\n"
     "  --out DIR        output folder: trajectory.txt (TUM, T_w_c), stats.json, points.ply\n"
@@ -55,7 +61,16 @@ const char* kUsage =
     "  --print-config-markdown  print the configuration reference (docs/CONFIG.md: every key, its\n"
     "                   default and meaning) and exit\n"
     "  --check          no SLAM: read every frame and print 'index timestamp WxH mean' lines\n"
-    "                   on stdout (a dataset check; --out is not needed)\n";
+    "                   on stdout (a dataset check; --out is not needed)\n"
+    "  --load-map FILE  start in this map (a --save-map file of the same camera): the camera is found\n"
+    "                   in it by relocalization, no initialization; poses are in its frame and scale.\n"
+    "                   Without --localization-only the map is extended (new keyframes and points)\n"
+    "  --localization-only  with --load-map: localize in the map without changing it (no keyframes,\n"
+    "                   no points, points not moved; never a new map); the file is not written\n"
+    "  --save-map FILE  write the map at the end (also after SIGINT), atomically; may be --load-map's\n"
+    "  --load-tsdf FILE start the dense reconstruction from this TSDF (a --save-tsdf file of a run in\n"
+    "                   the same map): the mesh of the mapped place is there from the start\n"
+    "  --save-tsdf FILE write the TSDF voxel blocks at the end\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 extern "C" void onSignal(int) { g_stop = 1; }
@@ -81,6 +96,8 @@ struct Options {
   bool print_reference = false;
   bool log_frames = false;
   bool pipelined = false;
+  std::string load_map, save_map, load_tsdf, save_tsdf;
+  bool localization_only = false;
 };
 
 std::size_t parseCount(const std::string& key, const std::string& v) {
@@ -126,6 +143,10 @@ Options parseArgs(int argc, char** argv) {
       o.print_reference = true;
       continue;
     }
+    if (a == "--localization-only") {
+      o.localization_only = true;
+      continue;
+    }
     if (i + 1 >= argc) fail(a.rfind("--", 0) == 0 ? a + " needs a value" : "unexpected argument '" + a + "'");
     const std::string v = argv[++i];
     if (a == "--dataset") o.dataset = v;
@@ -135,11 +156,19 @@ Options parseArgs(int argc, char** argv) {
     else if (a == "--topic") o.topic = v;
     else if (a == "--max-frames") o.max_frames = parseCount(a, v);
     else if (a == "--start-frame") o.start_frame = parseCount(a, v);
+    else if (a == "--load-map") o.load_map = v;
+    else if (a == "--save-map") o.save_map = v;
+    else if (a == "--load-tsdf") o.load_tsdf = v;
+    else if (a == "--save-tsdf") o.save_tsdf = v;
     else fail("unknown option '" + a + "' (see --help)");
   }
   if (o.print_config || o.print_reference) return o;
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
   if (o.out.empty() && !o.check) fail("--out DIR is required (see --help)");
+  if (o.localization_only && o.load_map.empty()) fail("--localization-only needs --load-map FILE (a map to localize in)");
+  if (o.localization_only && !o.save_map.empty()) {
+    fail("--localization-only does not change the map: --save-map cannot be used with it");
+  }
   return o;
 }
 
@@ -259,6 +288,21 @@ int run(const Options& o) {
     dense = std::make_unique<vitamin_e::fusion::DenseMapper>(
         config.dense, vitamin_e::meshing::pinholeIntrinsicsOf(calib.camera));
   }
+  if ((!o.load_tsdf.empty() || !o.save_tsdf.empty()) && !dense) {
+    fail("--load-tsdf / --save-tsdf need the dense reconstruction (dense_enabled is false in the config)");
+  }
+  if (!o.load_tsdf.empty()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      dense->loadTsdf(o.load_tsdf);
+    } catch (const vitamin_e::fusion::TsdfFileError& e) {
+      fail(e.what());
+    }
+    if (!o.quiet) {
+      std::fprintf(stderr, "[vitamin_e_run] TSDF '%s' loaded in %.0f ms\n", o.load_tsdf.c_str(),
+                   vitamin_e::elapsedMs(t0));
+    }
+  }
   std::vector<std::uint64_t> dense_ids;
   std::vector<Eigen::Vector3d> dense_points;
 
@@ -266,6 +310,8 @@ int run(const Options& o) {
   stats.dataset = o.dataset;
   stats.dataset_kind = dataset->kind();
   stats.config = o.config;
+  stats.loaded_map = o.load_map;
+  stats.localization_only = o.localization_only;
   Progress progress(end - o.start_frame, o.quiet);
   const auto t_start = vitamin_e::TimingClock::now();
   std::size_t attempted = 0;
@@ -294,6 +340,26 @@ int run(const Options& o) {
   if (o.pipelined) {
     pipelined = std::make_unique<pl::PipelinedSystem>(config, calib.camera, pl::PipelinedOptions{},
                                                       [&](pl::FrameResult r) { handle_result(r); });
+  }
+  if (!o.load_map.empty()) {
+    // Before the first frame: the system starts relocalizing in the loaded map.
+    pl::System& system = pipelined ? pipelined->system() : *sequential;
+    const auto t0 = std::chrono::steady_clock::now();
+    vitamin_e::map::MapFileContents contents;
+    try {
+      contents = vitamin_e::map::loadMapFile(o.load_map);
+      system.loadMap(contents);
+    } catch (const vitamin_e::map::MapFileError& e) {
+      fail(e.what());
+    } catch (const std::invalid_argument& e) {
+      fail("map file '" + o.load_map + "': " + e.what());
+    }
+    system.setLocalizationOnly(o.localization_only);
+    if (!o.quiet) {
+      std::fprintf(stderr, "[vitamin_e_run] %s: %s, loaded in %.0f ms%s\n", o.load_map.c_str(),
+                   vitamin_e::map::mapFileHeader(contents).c_str(), vitamin_e::elapsedMs(t0),
+                   o.localization_only ? " (localization only)" : "");
+    }
   }
   for (std::size_t i = o.start_frame; i < end && !g_stop; ++i) {
     ++attempted;
@@ -339,6 +405,8 @@ int run(const Options& o) {
   if (ok) ok = pl::saveMapPly(points, ply_path, &err);
   const std::string mesh_path = (fs::path(o.out) / "mesh.ply").string();
   if (ok && dense) ok = dense->saveMesh(mesh_path, &err);
+  if (ok && !o.save_tsdf.empty()) ok = dense->saveTsdf(o.save_tsdf, &err);
+  if (ok && !o.save_map.empty()) ok = system.saveMap(o.save_map, &err);
   stats.peak_rss_mb = io::peakRssMb();
   if (ok) ok = io::writeRunStats(stats, stats_path, &err);
   if (!ok) fail(err);
@@ -354,6 +422,11 @@ int run(const Options& o) {
     std::fprintf(stderr, "[vitamin_e_run] wrote %s, %s, %s%s%s (peak RSS %.0f MB)\n", traj_path.c_str(),
                  stats_path.c_str(), ply_path.c_str(), dense ? ", " : "", dense ? mesh_path.c_str() : "",
                  stats.peak_rss_mb);
+    if (!o.save_map.empty()) {
+      std::fprintf(stderr, "[vitamin_e_run] map: %s written to %s\n",
+                   vitamin_e::map::mapFileHeader(system.exportMap()).c_str(), o.save_map.c_str());
+    }
+    if (!o.save_tsdf.empty()) std::fprintf(stderr, "[vitamin_e_run] TSDF written to %s\n", o.save_tsdf.c_str());
   }
   if (stats.frames == 0 && !stats.interrupted) {
     fail("no frame of '" + o.dataset + "' could be read (" + std::to_string(stats.skipped_frames) + " skipped)");

@@ -33,11 +33,19 @@ std::string jsonNumber(double v, const ErrorStats& s) {
   return buf;
 }
 
+const char* alignmentName(const EvalConfig& config) {
+  return config.given_alignment ? "given" : config.align_scale ? "sim3" : "se3";
+}
+
 }  // namespace
 
 void EvalConfig::validate() const {
   if (!(max_dt > 0.0) || !std::isfinite(max_dt)) throw std::invalid_argument("max_dt must be > 0");
   if (!(rpe_delta_s > 0.0) || !std::isfinite(rpe_delta_s)) throw std::invalid_argument("rpe_delta_s must be > 0");
+  if (given_alignment && (!(given_alignment->scale > 0.0) || !std::isfinite(given_alignment->scale) ||
+                         !given_alignment->R.allFinite() || !given_alignment->t.allFinite())) {
+    throw std::invalid_argument("the given alignment is not a similarity transform");
+  }
 }
 
 ErrorStats errorStats(const std::vector<double>& errors) {
@@ -80,10 +88,14 @@ EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, 
     src.col(k) = estimate[r.pairs[k].first].T_w_c.translation();
     dst.col(k) = ground_truth[r.pairs[k].second].T_w_c.translation();
   }
-  try {
-    r.alignment = umeyamaAlignment(src, dst, config.align_scale);
-  } catch (const std::invalid_argument& e) {
-    throw TrajectoryError(std::string("cannot align: ") + e.what());
+  if (config.given_alignment) {
+    r.alignment = *config.given_alignment;
+  } else {
+    try {
+      r.alignment = umeyamaAlignment(src, dst, config.align_scale);
+    } catch (const std::invalid_argument& e) {
+      throw TrajectoryError(std::string("cannot align: ") + e.what());
+    }
   }
 
   r.errors.resize(r.matched);
@@ -129,7 +141,7 @@ std::string toJson(const EvalResult& r, const EvalConfig& config) {
     << ",\"rpe_delta_trans_rmse_m\":" << jsonNumber(r.rpe_delta.rmse, r.rpe_delta);
   std::snprintf(buf, sizeof(buf),
                 ",\"rpe_delta_s\":%.3f,\"alignment\":\"%s\",\"estimate_poses\":%zu,\"ground_truth_poses\":%zu}",
-                config.rpe_delta_s, config.align_scale ? "sim3" : "se3", r.estimate_poses, r.ground_truth_poses);
+                config.rpe_delta_s, alignmentName(config), r.estimate_poses, r.ground_truth_poses);
   o << buf;
   return o.str();
 }
@@ -145,7 +157,7 @@ std::string summary(const EvalResult& r, const EvalConfig& config) {
   o << buf;
   const Eigen::AngleAxisd aa(r.alignment.R);
   std::snprintf(buf, sizeof(buf), "alignment (%s): scale %.6f, rotation %.3f deg, translation [%.3f %.3f %.3f] m\n",
-                config.align_scale ? "Sim(3)" : "SE(3)", r.alignment.scale, aa.angle() * 180.0 / M_PI,
+                config.given_alignment ? "given" : config.align_scale ? "Sim(3)" : "SE(3)", r.alignment.scale, aa.angle() * 180.0 / M_PI,
                 r.alignment.t.x(), r.alignment.t.y(), r.alignment.t.z());
   o << buf;
   std::snprintf(buf, sizeof(buf), "ATE [cm]: rmse %.3f  mean %.3f  median %.3f  max %.3f\n", 100.0 * r.ate.rmse,

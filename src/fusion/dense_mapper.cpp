@@ -64,6 +64,10 @@ bool DenseMapper::saveMesh(const std::string& path, std::string* error) {
   return integrator_->saveMesh(path, error);
 }
 
+bool DenseMapper::saveTsdf(const std::string& path, std::string* error) { return integrator_->saveVolume(path, error); }
+
+void DenseMapper::loadTsdf(const std::string& path) { integrator_->loadVolume(path); }
+
 TsdfIntegratorStats DenseMapper::integratorStats() const { return integrator_->stats(); }
 
 void DenseMapper::reset() {

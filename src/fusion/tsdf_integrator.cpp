@@ -100,6 +100,18 @@ bool TsdfIntegrator::saveMesh(const std::string& path, std::string* error) {
   return saveMeshPly(extractMesh(), path, error);
 }
 
+bool TsdfIntegrator::saveVolume(const std::string& path, std::string* error) {
+  flush();
+  std::lock_guard<std::mutex> lock(volume_mutex_);
+  return volume_.save(path, error);
+}
+
+void TsdfIntegrator::loadVolume(const std::string& path) {
+  flush();
+  std::lock_guard<std::mutex> lock(volume_mutex_);
+  volume_.load(path);
+}
+
 TsdfIntegratorStats TsdfIntegrator::stats() const {
   std::lock_guard<std::mutex> lock(queue_mutex_);
   return stats_;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <algorithm>
 
 namespace vitamin_e::map {
@@ -67,6 +68,13 @@ const Landmark& Map::addLandmark(const NewLandmark& n) {
 }
 
 void Map::removeLandmark(std::uint64_t id) { landmarks_.erase(id); }
+
+void Map::detachLandmark(std::uint64_t id) {
+  auto it = landmarks_.find(id);
+  if (it == landmarks_.end()) return;
+  retireLandmark(it->second);
+  landmarks_.erase(it);
+}
 
 void Map::setLandmarkPosition(std::uint64_t id, const Eigen::Vector3d& p_w) {
   if (Landmark* l = find(id)) l->p_w = p_w;
@@ -249,6 +257,97 @@ void Map::coarsenArchive() {
     archive_voxel_ *= 2.0;
   }
   archive_.swap(kept);
+}
+
+MapSnapshot Map::snapshot() const {
+  MapSnapshot s;
+  s.keyframes.assign(keyframes_.begin(), keyframes_.end());
+  s.landmarks.reserve(landmarks_.size());
+  for (const auto& kv : landmarks_) {
+    s.landmarks.push_back(kv.second);
+    s.landmarks.back().observations.clear();
+  }
+  std::sort(s.landmarks.begin(), s.landmarks.end(), [](const Landmark& a, const Landmark& b) { return a.id < b.id; });
+  s.dormant.assign(dormant_.begin(), dormant_.end());
+  s.dormant_dropped = dormant_dropped_;
+  s.archive = archive_;
+  s.archive_voxel = archive_voxel_;
+  return s;
+}
+
+namespace {
+void check(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("map snapshot: " + what);
+}
+bool finitePose(const Eigen::Isometry3d& T) {
+  if (!T.matrix().allFinite()) return false;
+  const Eigen::Matrix3d R = T.linear();
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 && R.determinant() > 0.0;
+}
+}  // namespace
+
+void Map::restore(const MapSnapshot& s) {
+  // Checked completely before anything changes.
+  for (std::size_t k = 0; k < s.keyframes.size(); ++k) {
+    const Keyframe& kf = s.keyframes[k];
+    const std::string name = "keyframe " + std::to_string(kf.frame_index);
+    check(k == 0 || kf.frame_index > s.keyframes[k - 1].frame_index, name + " is not newer than the one before it");
+    check(std::isfinite(kf.timestamp), name + " has a non-finite timestamp");
+    check(finitePose(kf.T_w_c), name + " has no valid pose");
+    for (const auto& o : kf.observations) check(o.second.allFinite(), name + " has a non-finite observation");
+  }
+  std::unordered_map<std::uint64_t, Landmark> landmarks;
+  landmarks.reserve(s.landmarks.size());
+  for (const Landmark& l : s.landmarks) {
+    const std::string name = "landmark " + std::to_string(l.id);
+    check(l.p_w.allFinite(), name + " has a non-finite position");
+    check(l.polarity >= -1 && l.polarity <= 1, name + " has a curvature sign of " + std::to_string(l.polarity));
+    check(l.num_observations >= 0 && l.outlier_count >= 0, name + " has negative counts");
+    Landmark copy = l;
+    copy.observations.clear();
+    check(landmarks.emplace(l.id, std::move(copy)).second, name + " appears twice");
+  }
+  for (const DormantLandmark& d : s.dormant) {
+    check(d.p_w.allFinite(), "dormant landmark " + std::to_string(d.id) + " has a non-finite position");
+    check(d.polarity >= -1 && d.polarity <= 1, "dormant landmark " + std::to_string(d.id) + " has a bad curvature sign");
+  }
+  for (const ArchivedPoint& a : s.archive) check(a.p_w.allFinite(), "an archived point is not finite");
+  check(std::isfinite(s.archive_voxel) && s.archive_voxel >= 0.0, "the archive voxel is not a size");
+
+  // Observations on both sides: a landmark's are the keyframes' of its track.
+  for (const Keyframe& kf : s.keyframes) {
+    for (const auto& o : kf.observations) {
+      auto it = landmarks.find(o.first);
+      if (it != landmarks.end()) it->second.observations.push_back({kf.frame_index, o.second});
+    }
+  }
+  std::vector<std::uint64_t> orphans;
+  for (const auto& kv : landmarks) {
+    if (kv.second.observations.empty()) orphans.push_back(kv.first);
+  }
+  std::sort(orphans.begin(), orphans.end());
+  landmarks_.swap(landmarks);
+  keyframes_.assign(s.keyframes.begin(), s.keyframes.end());
+  orphans_.swap(orphans);
+  dormant_.assign(s.dormant.begin(), s.dormant.end());
+  dormant_dropped_ = s.dormant_dropped;
+  archive_ = s.archive;
+  archive_voxel_ = std::max(s.archive_voxel, config_.archive_voxel_m);
+  archive_voxels_.clear();
+  if (archive_voxel_ > 0.0) {
+    for (const ArchivedPoint& a : archive_) archive_voxels_.insert(voxelKey(a.p_w, archive_voxel_));
+  }
+  // This map's bounds apply.
+  if (!archive_.empty() && archive_.size() >= config_.max_archive_points) coarsenArchive();
+  while (dormant_.size() > config_.max_dormant_landmarks) {
+    dormant_.pop_front();
+    ++dormant_dropped_;
+  }
+  while (static_cast<int>(keyframes_.size()) > config_.max_keyframes) {
+    Keyframe oldest = std::move(keyframes_.front());
+    keyframes_.pop_front();
+    retireKeyframe(oldest);
+  }
 }
 
 std::vector<ArchivedPoint> Map::allPoints() const {

@@ -68,6 +68,14 @@ void FrontEnd::dropTracks(const std::vector<std::uint64_t>& ids) {
   pending_drops_.insert(pending_drops_.end(), ids.begin(), ids.end());
 }
 
+void FrontEnd::continueNumbering(std::uint64_t next_frame_index, std::uint64_t next_track_id) {
+  if (next_frame_index > next_frame_index_) {
+    frame_index_offset_ += next_frame_index - next_frame_index_;
+    next_frame_index_ = next_frame_index;
+  }
+  tracker_.reserveIdsBelow(next_track_id);
+}
+
 void FrontEnd::reset() {
   tracker_.reset();
   std::lock_guard<std::mutex> lock(drops_mutex_);

@@ -25,7 +25,13 @@ std::vector<std::uint64_t> Mapper::penalize(const std::vector<std::uint64_t>& id
   for (std::uint64_t id : ids) {
     if (map->flagOutlier(id) >= config_.max_outlier_count) removed.push_back(id);
   }
-  for (std::uint64_t id : removed) map->removeLandmark(id);
+  for (std::uint64_t id : removed) {
+    if (localization_only_) {
+      map->detachLandmark(id);
+    } else {
+      map->removeLandmark(id);
+    }
+  }
   return removed;
 }
 
@@ -87,7 +93,8 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
         ++seen;
       }
     }
-    problem.points.back().fixed = seen < 2 || (l->revived && config_.reuse_fix_revived);
+    problem.points.back().fixed =
+        seen < 2 || (l->revived && config_.reuse_fix_revived) || (localization_only_ && !keyframe_window);
     return idx;
   };
   if (keyframe_window) {
@@ -127,7 +134,9 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
   std::vector<std::uint64_t> ids(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     ids[i] = points[i]->id;
-    if (problem.points[i].p_w.allFinite()) map->setLandmarkPosition(ids[i], problem.points[i].p_w);
+    if (!problem.points[i].fixed && problem.points[i].p_w.allFinite()) {
+      map->setLandmarkPosition(ids[i], problem.points[i].p_w);
+    }
   }
   // Observations far off after the optimization mark their points; repeated
   // offenders are removed from the map and their tracks dropped.

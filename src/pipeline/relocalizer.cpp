@@ -74,6 +74,75 @@ void Relocalizer::clear() {
   }
 }
 
+std::vector<map::IndexedKeyframe> Relocalizer::exportEntries() const {
+  std::vector<map::IndexedKeyframe> out;
+  out.reserve(entries_.size());
+  for (const Entry& e : entries_) {
+    map::IndexedKeyframe k;
+    k.frame_index = e.frame_index;
+    k.T_w_c = e.T_w_c;
+    k.points.reserve(e.points.size());
+    for (const Point& p : e.points) {
+      map::IndexedPoint q;
+      q.landmark_id = p.landmark_id;
+      q.p_w = p.p_w;
+      q.descriptor = p.descriptor.bits;
+      q.polarity = p.polarity;
+      k.points.push_back(q);
+    }
+    out.push_back(std::move(k));
+  }
+  return out;
+}
+
+void Relocalizer::importEntries(const std::vector<map::IndexedKeyframe>& entries) {
+  clear();
+  const std::size_t keep = std::min(entries.size(), static_cast<std::size_t>(config_.max_keyframes));
+  for (std::size_t i = entries.size() - keep; i < entries.size(); ++i) {
+    const map::IndexedKeyframe& k = entries[i];
+    Entry e;
+    e.serial = next_serial_++;
+    e.frame_index = k.frame_index;
+    e.T_w_c = k.T_w_c;
+    e.points.reserve(k.points.size());
+    e.descriptors.reserve(k.points.size());
+    e.polarities.reserve(k.points.size());
+    for (const map::IndexedPoint& q : k.points) {
+      Point p;
+      p.landmark_id = q.landmark_id;
+      p.p_w = q.p_w;
+      p.descriptor.bits = q.descriptor;
+      p.polarity = q.polarity;
+      e.descriptors.push_back(p.descriptor);
+      e.polarities.push_back(p.polarity);
+      e.points.push_back(p);
+    }
+    entries_.push_back(std::move(e));
+  }
+  // The hash tables in one pass per table: bucket sizes counted first, so that
+  // a large index is not built by hundreds of thousands of reallocations.
+  std::vector<std::uint32_t> keys;
+  std::vector<std::uint32_t> count(std::size_t{1} << kKeyBits);
+  for (int t = 0; t < kTables; ++t) {
+    keys.clear();
+    std::fill(count.begin(), count.end(), 0u);
+    for (const Entry& e : entries_) {
+      for (std::size_t i = 0; i < e.points.size(); ++i) {
+        keys.push_back(key(t, e.descriptors[i], e.polarities[i]));
+        ++count[keys.back()];
+      }
+    }
+    for (std::size_t b = 0; b < count.size(); ++b) buckets_[t][b].reserve(count[b]);
+    std::size_t next = 0;
+    for (const Entry& e : entries_) {
+      for (std::size_t i = 0; i < e.points.size(); ++i) {
+        std::vector<std::uint32_t>& bucket = buckets_[t][keys[next++]];
+        if (bucket.empty() || bucket.back() != e.serial) bucket.push_back(e.serial);
+      }
+    }
+  }
+}
+
 cv::Mat Relocalizer::smooth(const cv::Mat& image) const {
   cv::Mat s;
   cv::GaussianBlur(image, s, cv::Size(0, 0), config_.smoothing_sigma);

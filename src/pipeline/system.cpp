@@ -53,7 +53,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   FrameResult result;
   result.timestamp = f.timestamp;
   result.state = state;
-  result.frame_index = f.frame_index;
+  result.frame_index = f.frame_index - front_end.frameIndexOffset();  // this stream's own count
   result.init_retries = counters.init_retries;
   result.relocalizations = counters.relocalizations;
   if (f.skipped) {
@@ -121,6 +121,10 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   ScopedTimer timer(&timings, "init");
   state = TrackingState::kInitializing;
   result->state = TrackingState::kInitializing;
+  if (localization_only) {  // a new map would be a change of the map
+    result->message = "localization only: no map to localize in";
+    return;
+  }
   // The first map defines the world (first reference camera = origin); after a
   // loss, the new map continues from the last known pose at the last scale.
   MapAnchor anchor;
@@ -173,7 +177,7 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
 void System::Impl::lose(const FrameContext& frame, const std::string& why, bool restart_from_frame,
                         FrameResult* result) {
   result->state = TrackingState::kLost;
-  if (config.relocalization.enabled && relocalizer.size() > 0) {
+  if ((config.relocalization.enabled && relocalizer.size() > 0) || keepRelocalizing()) {
     state = TrackingState::kRelocalizing;
     lost_frames = 0;
     result->message = "lost: " + why + "; relocalizing";
@@ -207,7 +211,7 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
   }
   // Frames too poor to initialize on (black, covered) do not use up the wait.
   if (static_cast<int>(frame.tracks.size()) >= config.min_init_tracks) ++lost_frames;
-  if (lost_frames >= config.relocalization.max_frames) {
+  if (lost_frames >= config.relocalization.max_frames && !keepRelocalizing()) {
     reinitialize("not relocalized in " + std::to_string(lost_frames) + " frames", result);
     initializer.restartFrom(frame);
     result->state = TrackingState::kLost;
@@ -239,12 +243,14 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   motion.restart(T_w_c, Eigen::Isometry3d::Identity());
-  const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
-  front_end.dropTracks(kf.removed);
-  T_w_c = kf.T_w_c;
-  motion.correctLast(T_w_c);
-  trajectory.back().T_w_c = T_w_c;
-  relocalizer.addKeyframe(frame.image, frame, T_w_c);
+  if (!localization_only) {
+    const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
+    front_end.dropTracks(kf.removed);
+    T_w_c = kf.T_w_c;
+    motion.correctLast(T_w_c);
+    trajectory.back().T_w_c = T_w_c;
+    relocalizer.addKeyframe(frame.image, frame, T_w_c);
+  }
   state = TrackingState::kTracking;
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
@@ -293,7 +299,7 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   motion.update(T_w_c);
   {
     ScopedTimer timer(&timings, "map", &result->timing_ms);
-    if (mapper.needKeyframe(frame, T_w_c, map)) {
+    if (!localization_only && mapper.needKeyframe(frame, T_w_c, map)) {
       const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
       front_end.dropTracks(kf.removed);
       T_w_c = kf.T_w_c;
@@ -316,6 +322,7 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
 }
 
 void System::Impl::reset() {
+  map_loaded = false;
   map.clear();
   relocalizer.clear();
   lost_frames = 0;
@@ -359,7 +366,10 @@ std::size_t System::framesProcessed() const { return impl_->counters.frames_proc
 std::size_t System::framesTracked() const { return impl_->counters.frames_tracked; }
 std::size_t System::reusedMapPoints() const { return impl_->reuse.totalReused(); }
 std::size_t System::dormantMapPoints() const { return impl_->map.dormant().size(); }
-long long System::firstInitFrame() const { return impl_->counters.first_init_frame; }
+long long System::firstInitFrame() const {
+  const long long f = impl_->counters.first_init_frame;
+  return f < 0 ? f : f - static_cast<long long>(impl_->front_end.frameIndexOffset());
+}
 std::size_t System::framesTrackedSinceInit() const {
   const RunCounters& c = impl_->counters;
   return c.first_init_frame < 0 ? 0 : c.frames_tracked - c.localized_before_init;

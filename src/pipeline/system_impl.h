@@ -44,6 +44,8 @@ struct System::Impl {
   bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
+  // A loss is not given up for a new map (system_map_io.cpp).
+  bool keepRelocalizing() const;
 
   SystemConfig config;
   camera::Camera camera;
@@ -61,6 +63,9 @@ struct System::Impl {
   bool initialized_once = false;
   double scene_depth = 1.0;           // median depth of the map seen from the camera, map units
   int lost_frames = 0;                // frames with features spent relocalizing since the loss
+  // map persistence (system_map_io.cpp)
+  bool localization_only = false;     // the map is not changed (System::setLocalizationOnly)
+  bool map_loaded = false;            // the map came from loadMap() (a loss is then never given up)
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
   // both threads (StageTimings is thread-safe)

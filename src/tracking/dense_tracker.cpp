@@ -339,6 +339,8 @@ void DenseTracker::reset() {
   impl_->exposure_log = 0.f;
 }
 
+void DenseTracker::reserveIdsBelow(std::uint64_t first_id) { impl_->next_id = std::max(impl_->next_id, first_id); }
+
 void DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
   if (ids.empty()) return;
   std::vector<std::uint64_t> sorted(ids);

@@ -2,7 +2,8 @@
 //   Pipeline.*   (pipeline.test)    bag -> tracking + meshing nodelets in one manager
 //   TwoProcess.* (two_process.test) tracking_node and tsdf_meshing_node, two processes
 //   BadInput.*   (bad_input.test)   wrong encoding / size / stamp: errors logged, no crash
-//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~map_file written when the nodelet unloads
+//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~map_file (the PLY export) written when the nodelet unloads
+//   MapFile.*    (map_file.test, test_ros_map_file.cpp) ~save_map / ~load_map / ~localization_only
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -30,6 +31,7 @@
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/eval/metrics.h"
 #include "vitamin_e/eval/trajectory.h"
+#include "vitamin_e/map/map_file.h"
 
 using vitamin_e_test::Watcher;
 using Statuses = std::vector<vitamin_e::TrackingStatus::ConstPtr>;
@@ -147,9 +149,13 @@ TEST(Pipeline, SavedTrajectoryAte) {
   save.request.path = out + "/pipeline_trajectory.txt";
   ASSERT_TRUE(ros::service::call("/tracking/save_trajectory", save));
   ASSERT_TRUE(save.response.success) << save.response.message;
-  save.request.path = out + "/pipeline_map.ply";
+  save.request.path = out + "/pipeline_points.ply";
+  ASSERT_TRUE(ros::service::call("/tracking/export_points", save));
+  EXPECT_TRUE(save.response.success) << save.response.message;
+  save.request.path = out + "/pipeline_map.vemap";
   ASSERT_TRUE(ros::service::call("/tracking/save_map", save));
   EXPECT_TRUE(save.response.success) << save.response.message;
+  EXPECT_NO_THROW(vitamin_e::map::loadMapFile(save.request.path));
   save.request.path = out + "/pipeline_mesh.ply";
   ASSERT_TRUE(ros::service::call("/tsdf_meshing/save_mesh", save));
   EXPECT_TRUE(save.response.success) << save.response.message;
@@ -354,7 +360,8 @@ TEST_F(BadInput, ResetAndTimeJumpsStartNewSegments) {
   for (const auto& m : status.messages()) EXPECT_GT(std::abs(m->header.stamp.toSec() - (t0 + 9.2)), 1e-3);
 }
 
-// (d, issue 7) ~trajectory_file and ~map_file are written when the tracking
+// (d, issue 7) ~trajectory_file and ~map_file (the PLY export, now also
+// ~export_points) are written when the tracking
 // nodelet goes away, as on SIGINT of its manager: loaded in this process with a
 // nodelet::Loader, fed the test bag's images, then unloaded.
 TEST(ShutdownSave, TrajectoryAndMapWrittenOnUnload) {

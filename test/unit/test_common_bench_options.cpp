@@ -64,7 +64,7 @@ class BenchOptions : public ::testing::Test {
 const std::map<std::string, std::string> kNumberOption = {
     {"bench_fusion_dense", "--step"},         {"bench_meshing_delaunay", "--points"},
     {"bench_optimization_ba", "--threads"},   {"bench_optimization_covariance", "--points"},
-    {"bench_system_soak", "--minutes"},
+    {"bench_system_soak", "--minutes"},       {"bench_system_map_file", "--points"},
     {"bench_tracking_render", "--per-frame"},
 };
 
@@ -112,6 +112,8 @@ TEST_F(BenchOptions, BadOptionsAreOneErrorLineAndExitTwo) {
   expectOneError("bench_optimization_ba", "--threads 0", "--threads");
   expectOneError("bench_system_soak", "--width 10", "--width");
   expectOneError("bench_meshing_delaunay", "--repeats 0", "--repeats");
+  expectOneError("bench_system_map_file", "--repeat 0", "--repeat");
+  expectOneError("bench_system_map_file", "--map " + (tmp_ / "none.vemap").string(), "none.vemap");
 }
 
 int main(int argc, char** argv) {

@@ -334,6 +334,30 @@ TEST(Evaluate, RelativeErrorIsScaleFreeAndSeesAJump) {
   EXPECT_DOUBLE_EQ(ve::evaluate(est, gt, se3).alignment.scale, 1.0);
 }
 
+TEST(Evaluate, AGivenAlignmentIsAppliedUnchanged) {
+  // A second run in the first run's map: the first run's alignment holds for
+  // it; a second run in a frame of its own is caught (it would not be if the
+  // alignment were fitted again).
+  const ve::Trajectory gt = makeGroundTruth(300, 0.0, 0.05);
+  const ve::Sim3 S = knownSim3();
+  const ve::Trajectory first(gt.begin(), gt.begin() + 150), second_gt(gt.begin() + 150, gt.end());
+  const ve::Trajectory first_est = transformWithNoise(first, S.inverse(), 0.001, 2).estimate;
+  const ve::EvalResult r0 = ve::evaluate(first_est, first);
+  ve::EvalConfig given;
+  given.given_alignment = r0.alignment;
+  const Noisy second = transformWithNoise(second_gt, S.inverse(), 0.001, 3);
+  const ve::EvalResult same_map = ve::evaluate(second.estimate, second_gt, given);
+  EXPECT_LT(same_map.ate.rmse, 1.2 * second.true_rmse);
+  EXPECT_EQ(same_map.alignment.scale, r0.alignment.scale);
+  ve::Sim3 other = S.inverse();
+  other.t += Eigen::Vector3d(0.05, 0.0, 0.0);  // 5 cm away in the estimate's units
+  const ve::Trajectory elsewhere = transformWithNoise(second_gt, other, 0.0, 4).estimate;
+  EXPECT_NEAR(ve::evaluate(elsewhere, second_gt, given).ate.rmse, 0.05 * S.scale, 1e-3);
+  EXPECT_LT(ve::evaluate(elsewhere, second_gt).ate.rmse, 1e-6);
+  given.given_alignment->scale = 0.0;
+  EXPECT_THROW(given.validate(), std::invalid_argument);
+}
+
 TEST(Readers, RejectBadInput) {
   TempDir dir;
   FILE* f = std::fopen(dir.file("bad.txt").c_str(), "w");

@@ -206,6 +206,35 @@ TEST(Relocalizer, AKeyframeRefusedForTooFewPointsDoesNotShiftTheVotesOfTheNextOn
   expectNear(r.T_w_c, T_w_lost, 0.01, 0.2);
 }
 
+TEST(Relocalizer, ExportedEntriesImportedIntoAnotherRelocalizerFindTheSameCamera) {
+  ve::map::Map map;
+  Relocalizer relocalizer(RelocalizerConfig{}, world().camera, pnpConfig());
+  indexKeyframe(cameraAt(0.0, 0.0, 0.0), 1, &map, &relocalizer);
+  indexKeyframe(cameraAt(0.0, 0.0, M_PI), 2, &map, &relocalizer);
+  const std::vector<ve::map::IndexedKeyframe> entries = relocalizer.exportEntries();
+  ASSERT_EQ(entries.size(), 2u);
+  EXPECT_GT(entries[0].points.size(), 500u);
+  Relocalizer copy(RelocalizerConfig{}, world().camera, pnpConfig());
+  copy.importEntries(entries);
+  ASSERT_EQ(copy.size(), 2u);
+  const Eigen::Isometry3d T_w_lost = cameraAt(0.2, -0.98, 0.17);
+  const FrameContext lost = world().detect(world().render(T_w_lost, 99), 3);
+  // An empty map: the positions come from the index alone.
+  const Relocalization a = relocalizer.relocalize(lost.image, lost, ve::map::Map());
+  const Relocalization b = copy.relocalize(lost.image, lost, ve::map::Map());
+  ASSERT_TRUE(a.ok && b.ok) << a.why << " / " << b.why;
+  EXPECT_EQ(a.keyframe, b.keyframe);
+  EXPECT_EQ(a.matches, b.matches);
+  EXPECT_TRUE(a.T_w_c.matrix() == b.T_w_c.matrix());
+  // A relocalizer keeping fewer keyframes takes the newest.
+  RelocalizerConfig small;
+  small.max_keyframes = 1;
+  Relocalizer one(small, world().camera, pnpConfig());
+  one.importEntries(entries);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_EQ(one.exportEntries().front().frame_index, 2u);
+}
+
 TEST(Relocalizer, RejectsBadConfig) {
   RelocalizerConfig c;
   c.patch_size = 8;

@@ -1,13 +1,17 @@
 // The offline runner (vitamin_e_run, built next to this test) stopped by SIGINT
 // or SIGTERM in the middle of a run on a generated sequence: it must finish the
 // current frame, write trajectory.txt, points.ply and stats.json (well-formed,
-// finite, marked interrupted) and exit 0, within seconds (no hang).
+// finite, marked interrupted) and exit 0, within seconds (no hang). The map and
+// TSDF files asked for are written too, and a later run localizes in that map
+// (--load-map --localization-only) without initializing; damaged map files give
+// one error line and exit code 2.
 #include <gtest/gtest.h>
 
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -17,9 +21,11 @@
 #include <iterator>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
+#include "vitamin_e/map/map_file.h"
 #include "vitamin_e/synth/sequence.h"
 
 namespace fs = std::filesystem;
@@ -77,7 +83,7 @@ class RunnerSignal : public ::testing::Test {
 
   // Starts the runner, waits until it has processed a few frames, sends `sig`,
   // and waits (at most 60 s) for it to exit. Returns the exit status.
-  int runAndSignal(int sig, const fs::path& out, std::string* err) {
+  int runAndSignal(int sig, const fs::path& out, std::string* err, const std::vector<std::string>& extra = {}) {
     const fs::path err_path = out.string() + ".stderr";
     const pid_t pid = ::fork();
     if (pid == 0) {
@@ -85,7 +91,10 @@ class RunnerSignal : public ::testing::Test {
       std::freopen("/dev/null", "w", stdout);
       std::freopen(err_path.c_str(), "w", stderr);
       const std::string dataset = (dir_ / "seq").string(), out_dir = out.string(), runner = runner_.string();
-      ::execl(runner.c_str(), runner.c_str(), "--dataset", dataset.c_str(), "--out", out_dir.c_str(), nullptr);
+      std::vector<const char*> argv = {runner.c_str(), "--dataset", dataset.c_str(), "--out", out_dir.c_str()};
+      for (const std::string& a : extra) argv.push_back(a.c_str());
+      argv.push_back(nullptr);
+      ::execv(runner.c_str(), const_cast<char* const*>(argv.data()));
       std::_Exit(127);
     }
     EXPECT_GT(pid, 0);
@@ -216,6 +225,75 @@ TEST_F(RunnerSignal, SigtermWritesTrajectoryMapAndStats) {
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0) << ": " << err;
   EXPECT_EQ(WEXITSTATUS(status), 0) << err;
   expectCompleteOutputs(out, err);
+}
+
+namespace {
+// Runs the runner to the end; returns its exit code and stderr.
+int runToEnd(const fs::path& runner, const std::string& args, const fs::path& err_path, std::string* err) {
+  const std::string cmd = runner.string() + " " + args + " </dev/null >/dev/null 2>" + err_path.string();
+  const int status = std::system(cmd.c_str());
+  *err = readFile(err_path);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+}  // namespace
+
+TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
+  const fs::path out = dir_ / "out_map";
+  const std::string map = (dir_ / "seq.vemap").string(), tsdf = (dir_ / "seq.vetsdf").string();
+  std::string err;
+  const int status = runAndSignal(SIGINT, out, &err, {"--save-map", map, "--save-tsdf", tsdf});
+  ASSERT_TRUE(WIFEXITED(status)) << err;
+  ASSERT_EQ(WEXITSTATUS(status), 0) << err;
+  const vitamin_e::map::MapFileContents saved = vitamin_e::map::loadMapFile(map);
+  EXPECT_EQ(readFile(map).rfind("vitamin_e map v1, ", 0), 0u);
+  EXPECT_EQ(saved.camera.width(), 376);
+  ASSERT_GT(saved.keyframe_index.size(), 0u) << "the interrupted run made no keyframe: " << err;
+  const std::string map_bytes = readFile(map);
+
+  // Frames 0..59 of the same sequence in the saved map: found by the
+  // relocalizer, no initialization, the file untouched.
+  const fs::path out2 = dir_ / "out_localize";
+  const std::string base = "--dataset " + (dir_ / "seq").string() + " --max-frames 60 --quiet";
+  ASSERT_EQ(runToEnd(runner_, base + " --out " + out2.string() + " --load-map " + map + " --localization-only" +
+                                  " --load-tsdf " + tsdf,
+                     dir_ / "localize.stderr", &err),
+            0)
+      << err;
+  const YAML::Node stats = YAML::LoadFile((out2 / "stats.json").string());
+  EXPECT_EQ(stats["init_retries"].as<int>(), 0);
+  EXPECT_EQ(stats["first_init_frame"].as<int>(), -1);
+  EXPECT_GE(stats["relocalizations"].as<int>(), 1);
+  EXPECT_GE(stats["tracked_frames"].as<int>(), 50) << err;
+  EXPECT_TRUE(readFile(map) == map_bytes);
+
+  // Bad map files: one error line, exit code 2.
+  auto expectRefused = [&](const std::string& args, const std::string& what) {
+    const int code = runToEnd(runner_, base + " --out " + (dir_ / "out_bad").string() + " " + args,
+                              dir_ / "bad.stderr", &err);
+    EXPECT_EQ(code, 2) << args << ": " << err;
+    EXPECT_EQ(err.rfind("error: ", 0), 0u) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_NE(err.find(what), std::string::npos) << "'" << what << "' not in: " << err;
+  };
+  const std::string empty = (dir_ / "empty.vemap").string(), cut = (dir_ / "cut.vemap").string(),
+                    flipped = (dir_ / "flipped.vemap").string(), other = (dir_ / "other.vemap").string();
+  std::ofstream(empty, std::ios::binary).flush();
+  std::ofstream(cut, std::ios::binary) << map_bytes.substr(0, map_bytes.size() * 2 / 3);
+  std::string flip = map_bytes;
+  flip[flip.size() / 2] = static_cast<char>(flip[flip.size() / 2] ^ 0x10);
+  std::ofstream(flipped, std::ios::binary) << flip;
+  vitamin_e::map::MapFileContents small = saved;
+  small.camera = vitamin_e::camera::Camera(188, 120, 100.0, 100.0, 94.0, 60.0);
+  ASSERT_TRUE(vitamin_e::map::saveMapFile(small, other));
+  expectRefused("--load-map " + (dir_ / "missing.vemap").string(), "missing.vemap");
+  expectRefused("--load-map " + empty, "empty");
+  expectRefused("--load-map " + cut, "truncated");
+  expectRefused("--load-map " + flipped, "corrupt");
+  expectRefused("--load-map " + other, "188x120");
+  expectRefused("--localization-only", "--load-map");
+  expectRefused("--load-map " + map + " --localization-only --save-map " + map, "--save-map");
+  expectRefused("--load-tsdf " + map, "not a vitamin_e TSDF file");
+  EXPECT_TRUE(readFile(map) == map_bytes);
 }
 
 int main(int argc, char** argv) {

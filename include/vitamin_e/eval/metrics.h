@@ -4,6 +4,7 @@
 // error (RMSE/mean/median/max of position error), success rate (matched poses /
 // frames) and translational relative pose error (after the scale alignment).
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,9 @@ struct EvalConfig {
   bool align_scale = true;   // Sim(3); false: SE(3) (scale-known estimates)
   std::size_t frames = 0;    // N for the success rate; 0: number of estimate poses
   double rpe_delta_s = 1.0;  // time delta of the second RPE [s]
+  // Given: this estimate -> ground truth transform is applied as it is instead
+  // of fitting one (e.g. the one fitted on an earlier run in the same map).
+  std::optional<Sim3> given_alignment;
   void validate() const;     // throws std::invalid_argument naming the key
 };
 

@@ -52,6 +52,10 @@ class DenseMapper {
   void flush();  // waits for the queued frames to be fused
   TriangleMesh extractMesh();
   bool saveMesh(const std::string& path, std::string* error = nullptr);
+  // The TSDF's voxel blocks to / from a file (TsdfVolume::save / load): a run
+  // that loads the file of an earlier run in the same map starts with its mesh.
+  bool saveTsdf(const std::string& path, std::string* error = nullptr);
+  void loadTsdf(const std::string& path);  // throws fusion::TsdfFileError
   TsdfIntegratorStats integratorStats() const;
   void reset();
   const DenseMapperConfig& config() const { return config_; }

@@ -42,6 +42,9 @@ class TsdfIntegrator {
   bool saveMesh(const std::string& path, std::string* error = nullptr);
   TsdfIntegratorStats stats() const;
   void reset();  // clears the queue and the volume
+  // TsdfVolume::save / load of the volume (after the queued frames are fused).
+  bool saveVolume(const std::string& path, std::string* error = nullptr);
+  void loadVolume(const std::string& path);  // throws TsdfFileError
 
  private:
   struct Job {

@@ -15,6 +15,8 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "vitamin_e/fusion/triangle_mesh.h"
@@ -36,6 +38,11 @@ struct TsdfConfig {
   double weight_depth_ref = 0.0;
   int raster_downscale = 1;    // depth map at (width, height) / raster_downscale
   void validate() const;       // throws std::invalid_argument naming the key
+};
+
+// A TSDF file that cannot be read or does not fit the volume (TsdfVolume::load).
+struct TsdfFileError : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 struct Voxel {
@@ -87,6 +94,17 @@ class TsdfVolume {
 
   std::size_t numBlocks() const;
   void clear();
+
+  // The voxel blocks in a file (src/fusion/tsdf_file.cpp): a readable first
+  // line "vitamin_e tsdf v1, N blocks, voxel V, B^3 voxels per block", then the
+  // checked binary blocks (common/binary_file.h), written atomically. False
+  // (and *error) when it cannot be written.
+  bool save(const std::string& path, std::string* error = nullptr) const;
+  // Replaces the blocks with a file's, so that a later run starts with the
+  // surface of an earlier one (in the same map's frame and scale). The file's
+  // voxel size, block size and truncation must be this volume's. Throws
+  // TsdfFileError naming the file and the problem; the volume is then unchanged.
+  void load(const std::string& path);
   const TsdfConfig& config() const;
 
  private:

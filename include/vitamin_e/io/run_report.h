@@ -13,6 +13,9 @@ struct RunStats {
   std::string dataset;           // path as given
   std::string dataset_kind;      // "euroc", ...
   std::string config;            // config file ("" = defaults)
+  std::string loaded_map;        // map file the run started in ("" = none; with one, no initialization:
+                                 // first_init_frame stays -1)
+  bool localization_only = false;  // the loaded map was not changed
   std::size_t frames = 0;        // frames given to the system
   std::size_t tracked_frames = 0;
   std::size_t skipped_frames = 0;  // unreadable images (warned and skipped)

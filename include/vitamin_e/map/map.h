@@ -69,6 +69,18 @@ struct ArchivedPoint {
   std::uint8_t intensity;
 };
 
+// The map's state as plain data (Map::snapshot / Map::restore), e.g. for the
+// map file. Landmark observations are not part of it: they are the keyframes'
+// observations of the landmark's track, rebuilt on restore.
+struct MapSnapshot {
+  std::vector<Keyframe> keyframes;        // the active window, oldest first
+  std::vector<Landmark> landmarks;        // by id; `observations` left empty
+  std::vector<DormantLandmark> dormant;   // in retirement order
+  std::uint64_t dormant_dropped = 0;
+  std::vector<ArchivedPoint> archive;
+  double archive_voxel = 0.0;
+};
+
 struct MapConfig {
   int max_keyframes = 8;          // keyframes kept in the active window
   double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
@@ -89,6 +101,15 @@ class Map {
 
   void clear();  // drops active keyframes and landmarks (archive kept)
 
+  // Everything but the configuration, as plain data; ids sorted so that equal
+  // maps give equal snapshots.
+  MapSnapshot snapshot() const;
+  // Replaces the whole state with the snapshot's (under this map's config:
+  // keyframes beyond max_keyframes are retired, oldest first). Throws
+  // std::invalid_argument, leaving the map as it was, when the snapshot is
+  // inconsistent (keyframes out of order, duplicate ids, non-finite values).
+  void restore(const MapSnapshot& snapshot);
+
   // Read access. The map keeps its invariants (observations on both sides,
   // orphans, the archive): every change goes through the methods below.
   const Landmark* landmark(std::uint64_t id) const;
@@ -99,6 +120,10 @@ class Map {
   // keyframes have of its track.
   const Landmark& addLandmark(const NewLandmark& landmark);
   void removeLandmark(std::uint64_t id);  // bad point: dropped, not archived
+  // The landmark leaves the active map as if retired (archived once, kept as a
+  // dormant landmark a new track can take over): a map point whose track went
+  // wrong while the map must not lose points (localization only).
+  void detachLandmark(std::uint64_t id);
   void setLandmarkPosition(std::uint64_t id, const Eigen::Vector3d& p_w);
   void markSeen(std::uint64_t id, std::uint64_t frame_index);
   void markAllSeen(std::uint64_t frame_index);

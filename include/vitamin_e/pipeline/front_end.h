@@ -31,12 +31,20 @@ class FrontEnd {
   void dropTracks(const std::vector<std::uint64_t>& ids);
   // Forgets every track and pending drop; the stamp order is kept.
   void reset();
+  // Frames and tracks continue the numbering of a map loaded from a file: the
+  // next frame's index is at least next_frame_index (frame indices of this
+  // stream are offset by the difference, see frameIndexOffset()) and new track
+  // ids are at least next_track_id. Call before the first frame.
+  void continueNumbering(std::uint64_t next_frame_index, std::uint64_t next_track_id);
+  // Frame index of the first frame of this stream (0 unless continueNumbering).
+  std::uint64_t frameIndexOffset() const { return frame_index_offset_; }
   const camera::Camera& camera() const { return camera_; }
 
  private:
   camera::Camera camera_;
   tracking::DenseTracker tracker_;
   std::uint64_t next_frame_index_ = 0;
+  std::uint64_t frame_index_offset_ = 0;
   bool have_last_stamp_ = false;
   double last_stamp_ = 0.0;
   std::mutex drops_mutex_;

@@ -45,6 +45,10 @@ class Mapper {
   // Counts one more offence for each landmark; removes those at the limit
   // (pipeline.max_outlier_count) and returns their ids.
   std::vector<std::uint64_t> penalize(const std::vector<std::uint64_t>& ids, map::Map* map) const;
+  // Localization only: the map's points are not moved and not deleted. The
+  // per-frame BA refines the camera alone, and a point at the outlier limit is
+  // detached from its track (kept as a dormant point) instead of removed.
+  void setLocalizationOnly(bool on) { localization_only_ = on; }
 
  private:
   FrameRefinement bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
@@ -52,6 +56,7 @@ class Mapper {
 
   SystemConfig config_;
   camera::Camera camera_;
+  bool localization_only_ = false;
 };
 
 }  // namespace vitamin_e::pipeline

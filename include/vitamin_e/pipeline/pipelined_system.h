@@ -49,6 +49,9 @@ class PipelinedSystem {
   // The underlying system, for trajectory(), mapPoints(), counters: call only
   // after flush() (the mapping thread is idle then).
   const System& system() const { return *system_; }
+  // The same for changes (System::loadMap before the first submit(),
+  // System::setLocalizationOnly): only while the mapping thread is idle.
+  System& system() { return *system_; }
 
  private:
   struct Input {

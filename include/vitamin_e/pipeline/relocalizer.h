@@ -21,6 +21,7 @@
 #include "vitamin_e/camera/camera.h"
 #include "vitamin_e/geometry/pnp.h"
 #include "vitamin_e/map/map.h"
+#include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/frame_context.h"
 #include "vitamin_e/tracking/brief.h"
 
@@ -65,6 +66,12 @@ class Relocalizer {
   // point is still a landmark, else from the index.
   Relocalization relocalize(const cv::Mat& image, const FrameContext& frame, const map::Map& map) const;
   void clear();
+  // The index as plain data (oldest keyframe first), e.g. for the map file, and
+  // back: importEntries replaces the index (the newest max_keyframes are kept).
+  // Descriptors are only comparable between equal descriptorSettings().
+  std::vector<map::IndexedKeyframe> exportEntries() const;
+  void importEntries(const std::vector<map::IndexedKeyframe>& entries);
+  map::DescriptorSettings descriptorSettings() const { return {config_.patch_size, config_.smoothing_sigma}; }
   std::size_t size() const { return entries_.size(); }
   const RelocalizerConfig& config() const { return config_; }
 

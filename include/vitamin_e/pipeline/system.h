@@ -12,6 +12,7 @@
 
 #include "vitamin_e/camera/camera.h"
 #include "vitamin_e/common/timing.h"
+#include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/frame_result.h"
 #include "vitamin_e/pipeline/front_end.h"
 #include "vitamin_e/pipeline/system_config.h"
@@ -52,6 +53,29 @@ class System {
 
   // Forgets map and tracks; the trajectory so far is kept.
   void reset();
+
+  // Map persistence (the file: map/map_file.h; src/pipeline/system_map_io.cpp).
+  // exportMap: the map, the relocalizer's index, the camera and the scale as
+  // plain data. loadMap: the loaded map replaces the (empty) map and the system
+  // starts relocalizing in it: no initialization; the trajectory is in the
+  // loaded map's frame and scale, and frame indices and track ids continue its
+  // numbering. Call before the first frame. Throws std::invalid_argument
+  // naming the problem (another camera, descriptors made with other
+  // relocalization settings, relocalization off, an inconsistent map), and then
+  // changes nothing. Without localization only, the loaded map is extended.
+  // With a loaded map a loss is never given up for a new map (that would
+  // discard the loaded one): the camera is looked for in it until found.
+  map::MapFileContents exportMap() const;
+  void loadMap(const map::MapFileContents& contents);
+  // exportMap() written to a map file; false (and *error) when it cannot.
+  bool saveMap(const std::string& path, std::string* error = nullptr) const;
+  bool mapLoaded() const;  // loadMap() succeeded (and no reset() since)
+  // Localization only: track and relocalize in the existing map without
+  // changing it: no keyframe and no new point is added, the per-frame BA moves
+  // the camera only, tracks are only associated with existing points, and a
+  // loss is never given up for a new map. May be switched between frames.
+  void setLocalizationOnly(bool on);
+  bool localizationOnly() const;
 
   // Poses of every tracked frame so far, in time order, all in one world frame.
   const std::vector<TrajectoryEntry>& trajectory() const;

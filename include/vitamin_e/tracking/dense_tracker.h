@@ -150,6 +150,9 @@ class DenseTracker {
   void dropTracks(const std::vector<std::uint64_t>& ids);
   // Forgets all points and the previous frame; ids keep increasing.
   void reset();
+  // New tracks get ids >= first_id from now on (ids never decrease): tracks
+  // must not take the ids of the points of a map loaded from a file.
+  void reserveIdsBelow(std::uint64_t first_id);
   const TrackerConfig& config() const;
 
  private:

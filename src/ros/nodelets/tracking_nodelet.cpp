@@ -38,7 +38,14 @@ void TrackingNodelet::onInit() {
 
   if (!readFrameParameters(pnh)) return;
   pnh.param<std::string>("trajectory_file", trajectory_file_, "");
-  pnh.param<std::string>("map_file", map_file_, "");
+  pnh.param<std::string>("export_points", export_points_, "");
+  std::string legacy_points_file;
+  if (pnh.getParam("map_file", legacy_points_file) && export_points_.empty()) {
+    export_points_ = legacy_points_file;
+    NODELET_WARN("~map_file is the PLY export of the map points, now called ~export_points (~save_map: the map file)");
+  }
+  pnh.param<std::string>("load_map", load_map_, "");
+  pnh.param<std::string>("save_map", save_map_, "");
   pnh.param("process_all_frames", process_all_frames_, false);
   pnh.param("reset_on_time_jump", reset_on_time_jump_, true);
   pnh.param("time_jump_threshold", time_jump_threshold_s_, 1.0);
@@ -64,6 +71,15 @@ void TrackingNodelet::onInit() {
   }
   NODELET_INFO("SLAM config %s:\n%s", config_file.empty() ? "(defaults)" : config_file.c_str(),
                system_config_.describe().c_str());
+  if (!load_map_.empty()) {
+    try {
+      loaded_map_ = std::make_unique<vitamin_e::map::MapFileContents>(vitamin_e::map::loadMapFile(load_map_));
+    } catch (const std::exception& e) {
+      NODELET_FATAL("~load_map: %s (no subscription: fix the file or the parameter and restart)", e.what());
+      return;
+    }
+    NODELET_INFO("~load_map %s: %s", load_map_.c_str(), vitamin_e::map::mapFileHeader(*loaded_map_).c_str());
+  }
 
   path_.header.frame_id = map_frame_;
   pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("pose", 10);
@@ -98,6 +114,7 @@ void TrackingNodelet::onInit() {
   reset_srv_ = pnh.advertiseService("reset", &TrackingNodelet::resetService, this);
   save_trajectory_srv_ = pnh.advertiseService("save_trajectory", &TrackingNodelet::saveTrajectoryService, this);
   save_map_srv_ = pnh.advertiseService("save_map", &TrackingNodelet::saveMapService, this);
+  export_points_srv_ = pnh.advertiseService("export_points", &TrackingNodelet::exportPointsService, this);
 
   // Diagnostics are published from their own thread (below): they never wait for a frame being
   // processed. Every subscription and publisher is on the nodelet's single-threaded queue:
@@ -238,6 +255,22 @@ bool TrackingNodelet::createSystem(const vitamin_e::camera::Camera& camera) {
     stats_.calibrated = true;
   }
   NODELET_INFO("camera: %s", camera.describe().c_str());
+  if (loaded_map_) {
+    try {
+      system_->loadMap(*loaded_map_);
+    } catch (const std::exception& e) {
+      NODELET_FATAL("~load_map '%s': %s (no subscription: fix the file or the parameter and restart)",
+                    load_map_.c_str(), e.what());
+      system_.reset();
+      image_sub_.shutdown();
+      info_sub_.shutdown();
+      return false;
+    }
+    loaded_map_.reset();
+    NODELET_INFO("relocalizing in the loaded map %s%s", load_map_.c_str(),
+                 dyn_.localization_only ? " (localization only)" : "");
+  }
+  system_->setLocalizationOnly(dyn_.localization_only);
   return true;
 }
 
@@ -263,8 +296,16 @@ TrackingNodelet::~TrackingNodelet() {
     saveTrajectory(trajectory_file_, &message);
     std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
-  if (system_ && !map_file_.empty()) {
-    saveMap(map_file_, &message);
+  if (system_ && !export_points_.empty()) {
+    exportPoints(export_points_, &message);
+    std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
+  }
+  if (system_ && !save_map_.empty()) {
+    if (system_->localizationOnly()) {
+      message = "localization only: the map is unchanged, " + save_map_ + " not written";
+    } else {
+      saveMap(save_map_, &message);
+    }
     std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
 }
@@ -427,7 +468,11 @@ std::vector<TrajectorySegment> TrackingNodelet::segments() const {
 
 void TrackingNodelet::reconfigure(vitamin_e::TrackingConfig& config, uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (system_ && config.localization_only != dyn_.localization_only) {
+    NODELET_INFO("localization only %s", config.localization_only ? "on: the map is not changed" : "off");
+  }
   dyn_ = config;
+  if (system_) system_->setLocalizationOnly(dyn_.localization_only);
 }
 
 bool TrackingNodelet::resetService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
@@ -470,13 +515,28 @@ bool TrackingNodelet::saveMap(const std::string& path, std::string* message) {
     *message = "no SLAM system yet";
     return false;
   }
-  auto points = system_->mapPoints();
-  for (auto& p : points) p.p_w = T_map_w_ * p.p_w;
-  if (!vitamin_e::pipeline::saveMapPly(points, path, &error)) {
+  const vitamin_e::map::MapFileContents contents = system_->exportMap();
+  if (!vitamin_e::map::saveMapFile(contents, path, &error)) {
     *message = "cannot write map " + path + ": " + error;
     return false;
   }
-  *message = "map (" + std::to_string(points.size()) + " points in '" + map_frame_ + "', PLY) written to " + path;
+  *message = "map (" + vitamin_e::map::mapFileHeader(contents) + ") written to " + path;
+  return true;
+}
+
+bool TrackingNodelet::exportPoints(const std::string& path, std::string* message) {
+  std::string error;
+  if (!system_) {
+    *message = "no SLAM system yet";
+    return false;
+  }
+  auto points = system_->mapPoints();
+  for (auto& p : points) p.p_w = T_map_w_ * p.p_w;
+  if (!vitamin_e::pipeline::saveMapPly(points, path, &error)) {
+    *message = "cannot write map points " + path + ": " + error;
+    return false;
+  }
+  *message = "map points (" + std::to_string(points.size()) + " in '" + map_frame_ + "', PLY) written to " + path;
   return true;
 }
 
@@ -495,13 +555,26 @@ bool TrackingNodelet::saveTrajectoryService(vitamin_e::SaveFile::Request& req, v
 
 bool TrackingNodelet::saveMapService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string path = req.path.empty() ? map_file_ : req.path;
+  const std::string path = req.path.empty() ? save_map_ : req.path;
   if (path.empty()) {
     res.success = false;
-    res.message = "no path given and ~map_file not set";
+    res.message = "no path given and ~save_map not set";
     return true;
   }
   res.success = saveMap(path, &res.message);
+  NODELET_INFO("%s", res.message.c_str());
+  return true;
+}
+
+bool TrackingNodelet::exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::string path = req.path.empty() ? export_points_ : req.path;
+  if (path.empty()) {
+    res.success = false;
+    res.message = "no path given and ~export_points not set";
+    return true;
+  }
+  res.success = exportPoints(path, &res.message);
   NODELET_INFO("%s", res.message.c_str());
   return true;
 }

@@ -56,8 +56,10 @@ class TrackingNodelet : public nodelet::Nodelet {
   bool resetService(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool saveTrajectoryService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
   bool saveMapService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
+  bool exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
   bool saveTrajectory(const std::string& path, std::string* message);
-  bool saveMap(const std::string& path, std::string* message);
+  bool saveMap(const std::string& path, std::string* message);       // the map file (~load_map reads it)
+  bool exportPoints(const std::string& path, std::string* message);  // the map points as PLY
   // Ends the current SLAM run (its poses become a finished segment) and starts a fresh one:
   // no map, no last stamp, an empty path (mutex_ held).
   void startSegment(const std::string& why);
@@ -111,8 +113,11 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::string body_frame_;    // frame of the calibration's T_BS (camera in body/IMU)
   std::string imu_topic_;
   std::string trajectory_file_;
-  std::string map_file_;
   std::string transport_ = "raw";
+  std::string export_points_;  // PLY of the map points, written on shutdown (~export_points; ~map_file before)
+  std::string load_map_;       // map file loaded at start-up
+  std::string save_map_;       // map file written on shutdown (not in localization-only mode)
+  std::unique_ptr<vitamin_e::map::MapFileContents> loaded_map_;  // ~load_map, until the system takes it
   bool process_all_frames_ = false;
   bool optical_map_ = false;  // ~map_convention: optical (the core's world frame)
   double gravity_window_s_ = 1.0;
@@ -160,7 +165,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   ros::Subscriber compressed_sub_, info_sub_, imu_sub_;
   ros::Publisher pose_pub_, odom_pub_, path_pub_, points_pub_, map_points_pub_, status_pub_, frame_pub_;
   image_transport::Publisher tracking_image_pub_;
-  ros::ServiceServer reset_srv_, save_trajectory_srv_, save_map_srv_;
+  ros::ServiceServer reset_srv_, save_trajectory_srv_, save_map_srv_, export_points_srv_;
   std::unique_ptr<dynamic_reconfigure::Server<vitamin_e::TrackingConfig>> reconfigure_server_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;

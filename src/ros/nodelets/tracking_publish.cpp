@@ -42,6 +42,10 @@ void TrackingNodelet::publishResult(const FrameResult& result, const std_msgs::H
   status->frames_tracked = finished_tracked_ + system_->framesTracked();
   status->segment = segment_;
   status->message = result.message;
+  if (system_->mapLoaded()) {  // a map from ~load_map: say whether the camera is in it
+    const std::string where = result.pose_valid ? "localizing in loaded map" : "lost in loaded map";
+    status->message = result.message.empty() ? where : where + ": " + result.message;
+  }
   status_pub_.publish(status);
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);

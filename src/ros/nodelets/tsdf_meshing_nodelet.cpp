@@ -4,7 +4,9 @@
 // fusion on its own thread); the zero level set is published every
 // ~publish_period as a chunked MarkerArray of TRIANGLE_LISTs. The dense settings
 // come from the "dense" section of ~config_file (the SLAM config, map units)
-// alone, as in the offline runner.
+// alone, as in the offline runner. ~load_tsdf: the TSDF of an earlier run (in
+// the same map) fused into from the start, its mesh published at once;
+// ~save_tsdf: written on shutdown (and by the ~save_tsdf service).
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -39,6 +41,11 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
       saveMesh(mesh_file_, &message);
       std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());  // rosout may be gone at shutdown
     }
+    if (dense_ && !save_tsdf_.empty()) {
+      std::string message;
+      saveTsdf(save_tsdf_, &message);
+      std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
+    }
   }
 
  private:
@@ -49,6 +56,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     std::string map_frame;
     std::string mesh_file;
     std::string config_file;
+    std::string load_tsdf, save_tsdf;
     int queue_size = 100;
   };
   Params readParams(ros::NodeHandle& pnh) {
@@ -57,6 +65,8 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     pnh.param("mesh_file", p.mesh_file, p.mesh_file);
     pnh.param("config_file", p.config_file, p.config_file);
     pnh.param("queue_size", p.queue_size, p.queue_size);
+    pnh.param("load_tsdf", p.load_tsdf, p.load_tsdf);
+    pnh.param("save_tsdf", p.save_tsdf, p.save_tsdf);
     // Parameters that overrode the yaml before: say where they went instead of ignoring them silently.
     for (const char* old : {"denoise", "voxel_size", "truncation", "max_weight", "min_depth", "max_depth",
                             "raster_downscale", "max_edge_px", "max_normal_angle_deg", "max_inv_depth_jump"}) {
@@ -73,6 +83,8 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     const Params params = readParams(pnh);
     map_frame_ = params.map_frame;
     mesh_file_ = params.mesh_file;
+    load_tsdf_ = params.load_tsdf;
+    save_tsdf_ = params.save_tsdf;
     try {
       const vitamin_e::pipeline::SystemConfig config = params.config_file.empty()
                                                            ? vitamin_e::pipeline::SystemConfig{}
@@ -87,6 +99,18 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
       NODELET_FATAL("%s (no subscription)", e.what());
       return;
     }
+    if (!load_tsdf_.empty()) {
+      // Read now (a bad file is fatal before subscribing); handed to the
+      // DenseMapper made at the first frame.
+      loaded_tsdf_ = std::make_unique<fusion::TsdfVolume>(dense_config_.integrator.tsdf);
+      try {
+        loaded_tsdf_->load(load_tsdf_);
+      } catch (const std::exception& e) {
+        NODELET_FATAL("~load_tsdf: %s (no subscription)", e.what());
+        return;
+      }
+      NODELET_INFO("~load_tsdf %s: %zu blocks", load_tsdf_.c_str(), loaded_tsdf_->numBlocks());
+    }
     config_ok_ = true;
     const fusion::TsdfConfig& tsdf = dense_config_.integrator.tsdf;
     NODELET_INFO("TSDF voxel %.3f, truncation %.3f, depth [%.2f, %.2f] (map units), NLTGV %s", tsdf.voxel_size,
@@ -94,10 +118,15 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
 
     mesh_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("mesh", 1, true);
     save_srv_ = pnh.advertiseService("save_mesh", &TsdfMeshingNodelet::saveMeshService, this);
+    save_tsdf_srv_ = pnh.advertiseService("save_tsdf", &TsdfMeshingNodelet::saveTsdfService, this);
     reconfigure_server_ =
         std::make_unique<dynamic_reconfigure::Server<vitamin_e::TsdfMeshingConfig>>(reconfigure_mutex_, pnh);
     reconfigure_server_->setCallback(
         [this](vitamin_e::TsdfMeshingConfig& c, uint32_t level) { reconfigure(c, level); });
+    if (loaded_tsdf_) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      publishLoadedMesh();
+    }
     frame_sub_ = nh.subscribe("frame", static_cast<uint32_t>(std::max(1, params.queue_size)),
                               &TsdfMeshingNodelet::frameCallback, this);
     NODELET_INFO("fusing frames from %s", frame_sub_.getTopic().c_str());
@@ -157,6 +186,10 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
       if (!dense_) {
         dense_ = std::make_unique<fusion::DenseMapper>(dense_config_, K);
         dense_K_ = K;
+        if (loaded_tsdf_) {
+          dense_->loadTsdf(load_tsdf_);  // the file checked at start-up
+          loaded_tsdf_.reset();
+        }
       } else if (K.fx != dense_K_.fx || K.fy != dense_K_.fy || K.cx != dense_K_.cx || K.cy != dense_K_.cy ||
                  K.width != dense_K_.width || K.height != dense_K_.height) {
         NODELET_ERROR_THROTTLE(2.0, "frame %lu has other intrinsics than the first frame: not fused",
@@ -206,6 +239,46 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     return true;
   }
 
+  // The mesh of ~load_tsdf, published (latched) before any frame arrives.
+  void publishLoadedMesh() {
+    const fusion::TriangleMesh mesh = loaded_tsdf_->extractMesh();
+    MeshMarkerOptions options;
+    options.frame_id = map_frame_.empty() ? "map" : map_frame_;
+    options.stamp = ros::Time::now();
+    options.triangles_per_marker = static_cast<std::size_t>(dyn_.triangles_per_marker);
+    options.color_by_height = dyn_.color_by_height;
+    visualization_msgs::MarkerArrayPtr markers(new visualization_msgs::MarkerArray);
+    std::size_t skipped = 0;
+    published_markers_ = meshToMarkers(mesh, options, published_markers_, markers.get(), &skipped);
+    mesh_pub_.publish(visualization_msgs::MarkerArrayConstPtr(markers));
+    NODELET_INFO("mesh of %s published: %zu triangles", load_tsdf_.c_str(), mesh.faces.size());
+  }
+
+  bool saveTsdf(const std::string& path, std::string* message) {
+    std::string error;
+    if (!dense_->saveTsdf(path, &error)) {
+      *message = "cannot write TSDF " + path + ": " + error;
+      return false;
+    }
+    *message = "TSDF (" + std::to_string(frames_integrated_) + " frames fused) written to " + path;
+    return true;
+  }
+
+  bool saveTsdfService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std::string path = req.path.empty() ? save_tsdf_ : req.path;
+    if (!dense_ || path.empty()) {
+      res.success = false;
+      res.message = !config_ok_ ? "no TSDF (bad parameters)"
+                    : !dense_   ? "no frame fused yet"
+                                : "no path given and ~save_tsdf not set";
+      return true;
+    }
+    res.success = saveTsdf(path, &res.message);
+    NODELET_INFO("%s", res.message.c_str());
+    return true;
+  }
+
   bool saveMeshService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
     std::lock_guard<std::mutex> lock(mutex_);
     const std::string path = req.path.empty() ? mesh_file_ : req.path;
@@ -223,6 +296,8 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
 
   std::string map_frame_;
   std::string mesh_file_;
+  std::string load_tsdf_, save_tsdf_;
+  std::unique_ptr<fusion::TsdfVolume> loaded_tsdf_;  // ~load_tsdf until the first frame
   std::mutex mutex_;
   vitamin_e::TsdfMeshingConfig dyn_;
   fusion::DenseMapperConfig dense_config_;
@@ -235,7 +310,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   bool changed_ = false;
   ros::Subscriber frame_sub_;
   ros::Publisher mesh_pub_;
-  ros::ServiceServer save_srv_;
+  ros::ServiceServer save_srv_, save_tsdf_srv_;
   ros::WallTimer timer_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<vitamin_e::TsdfMeshingConfig>> reconfigure_server_;
