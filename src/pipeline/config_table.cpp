@@ -177,6 +177,8 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("min_pose_inliers", &c.min_pose_inliers, "fewer P3P inliers than this: the frame is lost");
   t.key("min_pose_inlier_ratio", &c.min_pose_inlier_ratio,
         "... or fewer than this share of the tracked map points: the pose is not trusted, the frame is lost");
+  t.key("weak_pose_max_step_ratio", &c.weak_pose_max_step_ratio,
+        "... unless its translation step is within this factor of the motion model's (1: never)");
   t.key("max_outlier_count", &c.max_outlier_count, "times a point may be an outlier before it is removed");
   t.key("max_reprojection_px", &c.max_reprojection_px, "an observation's residual after BA above which its point is flagged [px]");
   t.key("ba_fixed_keyframes", &c.ba_fixed_keyframes, "oldest keyframes held fixed in the keyframe BA (gauge and scale)");

@@ -268,8 +268,12 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
     ScopedTimer pose_timer(&timings, "pose", &result->timing_ms);
     // Accepted only when well constrained (enough inliers, and most of the
     // tracked map points agree): however many tracks a turn or a cut ended.
-    const PoseEstimate pose = localizer.estimate(frame, motion.predict());
+    const PoseEstimate pose = localizer.estimate(frame, motion.predict(), &motion.lastPose());
     if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
+    if (pose.weak_kept) {
+      result->message = "weak pose kept: " + std::to_string(pose.num_inliers) + " of " +
+                        std::to_string(pose.num_points) + " tracked map points agree, the step is the predicted one";
+    }
     pose_timer.stop();
     if (!pose.ok) {
       lose(frame, pose.why, true, result);

@@ -37,6 +37,7 @@ struct SystemConfig {
   int init_max_pending_frames = 60;     // frames kept since the reference; beyond it the reference moves on
   int min_pose_inliers = 30;            // fewer P3P inliers than this: the frame is lost
   double min_pose_inlier_ratio = 0.5;   // ... or fewer than this share of the tracked map points
+  double weak_pose_max_step_ratio = 2.0;  // ... unless its step is within this factor of the predicted one
   int max_outlier_count = 2;            // times a point may be an outlier before it is removed
   double max_reprojection_px = 3.0;     // observation residual after BA above which a point is flagged
   int ba_fixed_keyframes = 2;           // oldest keyframes held fixed in the keyframe BA (gauge and scale)
