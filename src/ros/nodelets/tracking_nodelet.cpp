@@ -143,7 +143,8 @@ void TrackingNodelet::onInit() {
   // single-threaded queue: nodelet::Loader may delete a nodelet inside a callback of one of its
   // queues after the other queue is gone, and roscpp then crashes removing the callbacks of that
   // other queue's publishers (seen with the diagnostics publisher on the multi-threaded queue).
-  // The image queue is this nodelet's own: shut down and drained in the destructor.
+  // The image queue (images and camera_info) is this nodelet's own: shut down and drained in
+  // the destructor.
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
   diagnostics_->setHardwareID(camera_frame_.empty() ? "camera" : camera_frame_);
   diagnostics_->add("vitamin_e tracking", this, &TrackingNodelet::diagnose);
@@ -183,7 +184,9 @@ void TrackingNodelet::onInit() {
       return;
     }
   } else {
-    info_sub_ = nh.subscribe("camera_info", 1, &TrackingNodelet::cameraInfoCallback, this);
+    // On the images' queue: camera_info comes just before its image, and in one thread it is
+    // taken first (on another queue the first images would find no calibration yet).
+    info_sub_ = image_nh.subscribe("camera_info", 1, &TrackingNodelet::cameraInfoCallback, this);
     NODELET_INFO("no ~calibration_file: waiting for %s (%s)", info_sub_.getTopic().c_str(),
                  rectified_ ? "rectified image: P, no distortion" : "raw image: K and D");
   }
@@ -323,6 +326,7 @@ void TrackingNodelet::stopThreads() {
   if (queue_) queue_->close();
   image_sub_.shutdown();
   compressed_sub_.shutdown();
+  info_sub_.shutdown();
   image_queue_.disable();
   if (image_thread_.joinable()) image_thread_.join();
   image_queue_.clear();

@@ -5,11 +5,12 @@
 // re-expresses in the map frame (map_frame.h) and publishes.
 //
 // Threads (issue 15, item 8):
-//   image thread   own callback queue (image_queue_): converts each image and pushes it
-//                  into queue_ (live: newest only; ~process_all_frames: blocks when full)
+//   image thread   own callback queue (image_queue_): camera_info (calibration, starts the
+//                  SLAM thread), then converts each image and pushes it into queue_ (live:
+//                  newest only; ~process_all_frames: blocks when full)
 //   SLAM thread    owns system_ and everything marked [SLAM] below: takes the frames (and
 //                  the commands the services post) from queue_, runs the SLAM, publishes
-//   nodelet queue  (single-threaded) camera_info, IMU, services, dynamic_reconfigure: they
+//   nodelet queue  (single-threaded) IMU, services, dynamic_reconfigure: they
 //                  never wait for a frame being processed; ~save_trajectory reads a snapshot,
 //                  ~reset / ~save_map / ~export_points run on the SLAM thread between two
 //                  frames (ahead of the waiting ones) and wait for that
