@@ -149,6 +149,16 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
   cx = (cx + 0.5) / bx - 0.5;
   fy /= by;
   cy = (cy + 0.5) / by - 0.5;
+  // A driver without a calibration publishes a placeholder (image_publisher: fx = fy = 1). No
+  // real lens has a focal length below 1/20 of the image (a pinhole's field of view > 169 deg; a
+  // 220 deg fisheye has f ~ w / 4).
+  if (fx > 0.0 && fy > 0.0 && (fx < width / 20.0 || fy < height / 20.0)) {
+    throw CalibrationError("camera_info: focal length fx=" + std::to_string(fx) + " fy=" + std::to_string(fy) +
+                           " px for a " + std::to_string(width) + "x" + std::to_string(height) +
+                           " image is a placeholder, not a calibration (an uncalibrated driver?): calibrate the "
+                           "camera (camera_calibration) and give the driver its camera_info_url, or set "
+                           "~calibration_file");
+  }
 
   const std::string& m = info.distortion_model;
   std::vector<double> d(info.D.begin(), info.D.end());

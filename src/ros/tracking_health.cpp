@@ -22,11 +22,12 @@ Health trackingHealth(const HealthInput& in) {
     raise(DS::ERROR, "no calibration (~calibration_file or camera_info)");
   } else if (in.received == 0) {
     raise(DS::WARN, "no image received yet");
-  } else if (in.since_input_s > 2.0) {
+  } else if (in.since_input_s > 2.0 && in.queued == 0) {
     raise(DS::WARN, "no image for " + std::to_string(static_cast<long>(in.since_input_s)) + " s");
   } else if (in.since_processed_s > 2.0) {
-    raise(DS::ERROR, "images arrive but none processed for " + std::to_string(static_cast<long>(in.since_processed_s)) +
-                         " s");
+    // In bag mode a full queue holds the callback: no new image is seen, but frames wait.
+    raise(DS::ERROR, std::string(in.since_input_s > 2.0 ? "frames wait" : "images arrive") + " but none processed for " +
+                         std::to_string(static_cast<long>(in.since_processed_s)) + " s");
   }
   if (in.state == vitamin_e::TrackingStatus::LOST) raise(DS::ERROR, "lost: " + in.message);
   if (in.state == vitamin_e::TrackingStatus::RELOCALIZING) raise(DS::WARN, "relocalizing: " + in.message);
@@ -37,6 +38,10 @@ Health trackingHealth(const HealthInput& in) {
     std::snprintf(text, sizeof(text), "processing %.1f of %.1f frames/s (%s)", in.processed_hz, in.input_hz,
                   in.queue_all ? "queued: the latency grows" : "the rest is dropped");
     raise(DS::WARN, text);
+  }
+  if (in.queue_all && in.queued >= in.queue_capacity && in.since_processed_s <= 2.0) {
+    raise(DS::WARN, "the SLAM queue is full (" + std::to_string(in.queued) +
+                        " frames): the input waits, the latency grows (play the bag slower)");
   }
   if (h.summary.empty()) h.summary = "waiting for the first frame";
   return h;

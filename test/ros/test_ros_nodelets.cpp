@@ -2,16 +2,21 @@
 //   Pipeline.*   (pipeline.test)    bag -> tracking + meshing nodelets in one manager
 //   TwoProcess.* (two_process.test) tracking_node and tsdf_meshing_node, two processes
 //   BadInput.*   (bad_input.test)   wrong encoding / size / stamp: errors logged, no crash
-//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~map_file (the PLY export) written when the nodelet unloads
+//   ShutdownSave.* (shutdown_save.test) ~trajectory_file / ~map_file (the PLY export) written when the nodelet unloads,
+//                also while its SLAM thread holds a frame and its queue is full
+//   Threads.*    (threads.test, test_ros_threads.cpp) services and reconfigure beside a slow SLAM thread
 //   MapFile.*    (map_file.test, test_ros_map_file.cpp) ~save_map / ~load_map / ~localization_only
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <sstream>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <nodelet/loader.h>
 #include <ros/ros.h>
@@ -401,10 +406,10 @@ TEST(ShutdownSave, TrajectoryAndMapWrittenOnUnload) {
     }
     EXPECT_TRUE(status.waitFor([&](const Statuses& s) { return framesProcessed(s) >= images.size(); }, 60.0))
         << "frames processed: " << framesProcessed(status.messages()) << " of " << images.size();
-    // The status comes before the frame's callback ends. A service call is served on the same
-    // callback queue, so when it returns the last image callback is done: unloading a nodelet
-    // while one of its callbacks runs makes nodelet::Loader delete it after its callback
-    // queues (roscpp then crashes removing the publishers' callbacks).
+    // Unloading a nodelet while one of its callbacks runs makes nodelet::Loader delete it after
+    // its callback queues (roscpp then crashes removing the publishers' callbacks). Frames are
+    // not processed on those queues (the SLAM has its own thread), but a service call served
+    // on the nodelet's queue makes sure nothing else (a connection callback) is running there.
     vitamin_e::SaveFile idle;
     idle.request.path = out + "/shutdown_trajectory_before_unload.txt";
     ASSERT_TRUE(ros::service::call("/saver/save_trajectory", idle));
@@ -434,6 +439,74 @@ TEST(ShutdownSave, TrajectoryAndMapWrittenOnUnload) {
   std::string ply_text((std::istreambuf_iterator<char>(ply)), std::istreambuf_iterator<char>());
   EXPECT_EQ(ply_text.rfind("ply\n", 0), 0u);
   EXPECT_NE(ply_text.find("end_header\n"), std::string::npos);
+}
+
+// (d, issue 15 item 8) Unloading while the SLAM thread holds a frame (~debug_frame_delay 30 s),
+// its queue is full and the image callback waits on it: the nodelet stops its threads in order
+// (queue closed, callback woken, subscription shut down, SLAM thread joined) and saves, without
+// waiting for the held or the queued frames. Three rounds (an unload crash was intermittent).
+TEST(ShutdownSave, UnloadWhileFramesWait) {
+  const std::string out = param("output_dir", "/tmp");
+  std::vector<sensor_msgs::Image::ConstPtr> images;
+  {
+    rosbag::Bag bag(param("data_dir") + "/sequence.bag");
+    for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+      if (auto img = m.instantiate<sensor_msgs::Image>()) images.push_back(img);
+      if (images.size() == 10) break;
+    }
+  }
+  ASSERT_EQ(images.size(), 10u);
+  ros::NodeHandle nh;
+  ros::param::set("/busy/calibration_file", param("data_dir") + "/calibration.yaml");
+  ros::param::set("/busy/process_all_frames", true);
+  ros::param::set("/busy/debug_frame_delay", 30.0);
+  ros::param::set("/busy/diagnostic_period", 0.1);
+  for (int round = 0; round < 3; ++round) {
+    // A topic per round: the previous round's subscriber may still be counted for a while.
+    const std::string topic = "/busy_image_" + std::to_string(round);
+    ros::Publisher pub = nh.advertise<sensor_msgs::Image>(topic, 100);
+    const std::string traj_path = out + "/busy_trajectory_" + std::to_string(round) + ".txt";
+    std::remove(traj_path.c_str());
+    ros::param::set("/busy/trajectory_file", traj_path);
+    Watcher<diagnostic_msgs::DiagnosticArray> diagnostics(nh, "/diagnostics", 1000);
+    std::chrono::steady_clock::time_point t0;
+    {
+      nodelet::Loader loader(false);
+      ros::M_string remap;
+      remap[ros::names::resolve("/busy/image")] = topic;
+      remap["/image"] = topic;
+      ASSERT_TRUE(loader.load("/busy", "vitamin_e/TrackingNodelet", remap, nodelet::V_string()));
+      const auto deadline = ros::WallTime::now() + ros::WallDuration(30.0);
+      while (pub.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.02).sleep();
+      ASSERT_GT(pub.getNumSubscribers(), 0u) << "round " << round;
+      for (const auto& img : images) pub.publish(img);
+      // One frame held, the queue full (4 waiting): the callback with the sixth frame waits.
+      const bool full = diagnostics.waitFor(
+          [](const std::vector<diagnostic_msgs::DiagnosticArray::ConstPtr>& arrays) {
+            for (const auto& a : arrays)
+              for (const auto& s : a->status) {
+                if (s.name.find("busy: vitamin_e tracking") == std::string::npos) continue;
+                std::map<std::string, std::string> kv;
+                for (const auto& v : s.values) kv[v.key] = v.value;
+                if (kv["frames queued"] == kv["queue capacity"] && kv["SLAM thread busy"] == "yes") return true;
+              }
+            return false;
+          },
+          30.0);
+      EXPECT_TRUE(full) << "round " << round << ": the queue never filled";
+      vitamin_e::SaveFile idle;  // nothing else running on the nodelet's queue (see above)
+      idle.request.path = out + "/busy_trajectory_before_unload.txt";
+      ASSERT_TRUE(ros::service::call("/busy/save_trajectory", idle));
+      t0 = std::chrono::steady_clock::now();
+      ASSERT_TRUE(loader.unload("/busy"));
+    }
+    // The loader is gone: had a callback of the nodelet been running at unload (a service
+    // call's end), the nodelet was deleted after it, before the loader's threads ended.
+    const double unload_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_LT(unload_s, 10.0) << "round " << round << ": the unload waited for the held frame (30 s)";
+    std::ifstream traj(traj_path);
+    EXPECT_TRUE(traj.good()) << traj_path << " not written on unload";
+  }
 }
 
 int main(int argc, char** argv) {

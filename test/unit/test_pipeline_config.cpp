@@ -277,6 +277,26 @@ TEST_F(ConfigFile, InternalMembersAndBadValuesAreRefusedByName) {
   EXPECT_NE(err.find("max_depth"), std::string::npos) << err;
 }
 
+TEST(ConfigFiles, ShippedSlamConfigsLoad) {
+  // The SLAM configs in config/ (launch files and scripts name them): every key known, every
+  // value valid. webcam.yaml is euroc.yaml with the changes its comments state.
+  const fs::path dir = fs::path(VITAMIN_E_SOURCE_DIR) / "config";
+  std::map<std::string, pl::SystemConfig> loaded;
+  for (const char* name : {"euroc.yaml", "kitti.yaml", "tum.yaml", "webcam.yaml"}) {
+    ASSERT_TRUE(fs::exists(dir / name)) << dir / name;
+    try {
+      loaded[name] = pl::loadSystemConfig((dir / name).string());
+    } catch (const pl::ConfigError& e) {
+      ADD_FAILURE() << name << ": " << e.what();
+    }
+  }
+  ASSERT_EQ(loaded.count("webcam.yaml"), 1u);
+  const pl::SystemConfig& w = loaded["webcam.yaml"];
+  EXPECT_EQ(w.tracker.max_points, 6800);
+  EXPECT_EQ(w.pnp.ransac_threshold_px, 3.0);
+  EXPECT_EQ(w.ba.robust_sigma_px, 3.0);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

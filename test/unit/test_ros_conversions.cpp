@@ -165,6 +165,25 @@ TEST(RosConversions, CameraInfoWithAnUnknownModelIsRejected) {
     rejected = true;
   }
   EXPECT_TRUE(rejected) << "a camera_info with K = 0 gave a valid camera";
+  // image_publisher without camera_info_url: K = [1 0 w/2; 0 1 h/2], refused by name.
+  sensor_msgs::CameraInfo placeholder = zero;
+  placeholder.K = {1.0, 0.0, 80.0, 0.0, 1.0, 60.0, 0.0, 0.0, 1.0};
+  placeholder.P = {1.0, 0.0, 80.0, 0.0, 0.0, 1.0, 60.0, 0.0, 0.0, 0.0, 1.0, 0.0};
+  placeholder.distortion_model = "plumb_bob";
+  placeholder.D = {0.0, 0.0, 0.0, 0.0, 0.0};
+  for (bool rectified : {false, true}) {
+    try {
+      vitamin_e_ros::cameraFromInfo(placeholder, rectified);
+      ADD_FAILURE() << "a placeholder camera_info (fx = 1) was accepted";
+    } catch (const vitamin_e::camera::CalibrationError& e) {
+      EXPECT_NE(std::string(e.what()).find("placeholder"), std::string::npos) << e.what();
+    }
+  }
+  // A wide real lens is kept: a 180 deg fisheye on 160 px, f = 160 / pi.
+  placeholder.K[0] = placeholder.K[4] = 51.0;
+  placeholder.distortion_model = "equidistant";
+  placeholder.D = {0.01, 0.0, 0.0, 0.0};
+  EXPECT_EQ(vitamin_e_ros::cameraFromInfo(placeholder).width(), 160);
 }
 
 TEST(RosConversions, FinitenessChecksCatchEveryBadPose) {

@@ -199,6 +199,21 @@ TEST(RosTrackingHealth, Levels) {
   EXPECT_EQ(trackingHealth(in).level, DS::ERROR);
   in.since_input_s = 5.0;  // the camera stopped: a warning, not the SLAM's fault
   EXPECT_EQ(trackingHealth(in).level, DS::WARN);
+  // Bag mode, the SLAM stuck on a frame: the full queue holds the callback (no new image seen),
+  // but frames wait: the SLAM's fault.
+  in.queue_all = true;
+  in.queue_capacity = 4;
+  in.queued = 4;
+  EXPECT_EQ(trackingHealth(in).level, DS::ERROR);
+  EXPECT_NE(trackingHealth(in).summary.find("frames wait"), std::string::npos) << trackingHealth(in).summary;
+  // ... and processing, but slower than the input: the queue is full, the latency grows.
+  in.since_input_s = 0.02;
+  in.since_processed_s = 0.03;
+  const Health full = trackingHealth(in);
+  EXPECT_EQ(full.level, DS::WARN);
+  EXPECT_NE(full.summary.find("queue is full"), std::string::npos) << full.summary;
+  in.queued = 1;
+  EXPECT_EQ(trackingHealth(in).level, DS::OK);
 }
 
 int main(int argc, char** argv) {

@@ -16,6 +16,8 @@ struct HealthInput {
   double input_hz = 0.0;            // images received per second (wall clock)
   double processed_hz = 0.0;        // frames processed per second
   bool queue_all = false;           // ~process_all_frames: frames wait in the queue, none is dropped
+  std::size_t queued = 0;           // frames waiting in the SLAM thread's queue now
+  std::size_t queue_capacity = 1;   // its size (full in bag mode: the image callback waits)
 };
 
 struct Health {
@@ -23,9 +25,11 @@ struct Health {
   std::string summary;
 };
 
-// ERROR: no calibration; images arriving but none processed for 2 s; lost.
-// WARN: no image yet or for 2 s; initializing; fewer than 80 % of the arriving frames
-// processed (live: the rest is dropped; ~process_all_frames: they wait, the latency grows).
+// ERROR: no calibration; images arriving (or waiting in the SLAM queue) but none processed for
+// 2 s; lost.
+// WARN: no image yet or for 2 s (and none waiting); initializing; fewer than 80 % of the
+// arriving frames processed (live: the rest is dropped by the newest-only queue); the SLAM queue
+// full in bag mode (the image callback waits, frames pile up before it, the latency grows).
 // OK: tracking at the input rate.
 Health trackingHealth(const HealthInput& in);
 

@@ -1,7 +1,8 @@
 // TrackingNodelet on /diagnostics (diagnostic_updater): input and processed frame rates,
-// latency from the image stamp to the published pose, dropped frames, tracking state,
-// tracked points and re-initializations, with OK / WARN / ERROR levels. Reads only the
-// statistics (stats_mutex_), so a report never waits for a frame being processed.
+// latency from the image stamp to the published pose (queue wait included), the SLAM queue
+// (frames waiting, dropped by the live queue), tracking state, tracked points and
+// re-initializations, with OK / WARN / ERROR levels. Reads only the statistics (stats_mutex_)
+// and the queue's counts, so a report never waits for a frame being processed.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -60,6 +61,8 @@ void TrackingNodelet::noteRejected() {
 }
 
 void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  SlamQueue<QueuedFrame>::Counts queue;
+  if (queue_) queue = queue_->counts();
   std::lock_guard<std::mutex> lock(stats_mutex_);
   const double now = ros::WallTime::now().toSec();
   trim(&stats_.received_wall, now - kWindowS);
@@ -73,6 +76,9 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
     latency_max = std::max(latency_max, l);
   }
   if (!stats_.latency_s.empty()) latency_mean /= stats_.latency_s.size();
+  double wait_mean = 0.0;
+  for (double w : stats_.queue_wait_s) wait_mean += w;
+  if (!stats_.queue_wait_s.empty()) wait_mean /= stats_.queue_wait_s.size();
   const double since_input = stats_.received_wall.empty() ? 1e9 : now - stats_.received_wall.back();
   const double since_processed = stats_.processed_wall.empty() ? 1e9 : now - stats_.processed_wall.back();
 
@@ -86,6 +92,8 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   in.input_hz = input_hz;
   in.processed_hz = processed_hz;
   in.queue_all = process_all_frames_;
+  in.queued = queue.waiting;
+  in.queue_capacity = queue.capacity;
   const Health health = trackingHealth(in);
   status.summary(health.level, health.summary);
   status.add("state", stats_.state_name.empty() ? "none" : stats_.state_name);
@@ -97,6 +105,12 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("frames received", stats_.received);
   status.add("frames processed", stats_.processed);
   status.add("frames rejected (bad input)", stats_.rejected);
+  status.add("frames queued", queue.waiting);
+  status.add("queue capacity", queue.capacity);
+  status.add("queue mode", process_all_frames_ ? "every frame (the callback waits when full)" : "newest frame only");
+  status.add("SLAM thread busy", queue.busy ? "yes" : "no");
+  status.add("frames dropped by the queue", queue.dropped);
+  status.addf("queue wait mean [s]", "%.3f", wait_mean);
   status.add("frames missing between stamps", stats_.gap_dropped);
   status.add("tracked points", stats_.tracked);
   status.add("mapped points", stats_.mapped);

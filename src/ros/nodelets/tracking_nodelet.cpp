@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <future>
 
 #include <pluginlib/class_list_macros.hpp>
 
@@ -20,6 +21,10 @@ namespace vitamin_e_ros {
 using vitamin_e::pipeline::FrameResult;
 
 namespace {
+
+// Frames the SLAM queue holds in bag mode (~process_all_frames): enough to hand over without a
+// gap; more wait in the subscriber's queue.
+constexpr std::size_t kBagQueueFrames = 4;
 
 // ~rectified: true, false or "auto" (from the image topic's name).
 std::string rectifiedParam(ros::NodeHandle& pnh) {
@@ -51,6 +56,7 @@ void TrackingNodelet::onInit() {
   pnh.param("time_jump_threshold", time_jump_threshold_s_, 1.0);
   int queue_size = 1;
   pnh.param("queue_size", queue_size, process_all_frames_ ? 10000 : 1);
+  pnh.param("debug_frame_delay", debug_frame_delay_s_, 0.0);
   std::string config_file, calibration_file;
   pnh.param<std::string>("config_file", config_file, "");
   pnh.param<std::string>("calibration_file", calibration_file, "");
@@ -58,6 +64,18 @@ void TrackingNodelet::onInit() {
     NODELET_FATAL("~time_jump_threshold must be > 0 s (got %g)", time_jump_threshold_s_);
     return;
   }
+  if (!(debug_frame_delay_s_ >= 0.0 && debug_frame_delay_s_ <= 60.0)) {
+    NODELET_FATAL("~debug_frame_delay must be in [0, 60] s (got %g)", debug_frame_delay_s_);
+    return;
+  }
+  if (debug_frame_delay_s_ > 0.0) {
+    NODELET_WARN("~debug_frame_delay %.3f s: every frame is held that long before it is processed (for tests)",
+                 debug_frame_delay_s_);
+  }
+  // The SLAM thread's input: live, the newest frame only (a frame arriving while one waits
+  // replaces it); bags, a few frames and the callback waits when they are full (the rest wait in
+  // the subscriber's queue, ~queue_size).
+  queue_ = std::make_unique<SlamQueue<QueuedFrame>>(process_all_frames_ ? kBagQueueFrames : 1, !process_all_frames_);
 
   try {
     if (!config_file.empty()) {
@@ -89,7 +107,11 @@ void TrackingNodelet::onInit() {
   map_points_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("map_points", 1, true);
   status_pub_ = pnh.advertise<vitamin_e::TrackingStatus>("status", 10);
   frame_pub_ = pnh.advertise<vitamin_e::TrackedFrame>("frame", process_all_frames_ ? 1000 : 5);
-  it_ = std::make_unique<image_transport::ImageTransport>(nh);
+  // Images on their own callback queue and thread: in bag mode the callback waits while the
+  // SLAM queue is full, and nothing else (services, reconfigure, camera_info, IMU) waits with it.
+  ros::NodeHandle image_nh(nh);
+  image_nh.setCallbackQueue(&image_queue_);
+  it_ = std::make_unique<image_transport::ImageTransport>(image_nh);
   image_transport::ImageTransport private_it(pnh);
   tracking_image_pub_ = private_it.advertise("tracking_image", 1);
 
@@ -117,10 +139,12 @@ void TrackingNodelet::onInit() {
   export_points_srv_ = pnh.advertiseService("export_points", &TrackingNodelet::exportPointsService, this);
 
   // Diagnostics are published from their own thread (below): they never wait for a frame being
-  // processed. Every subscription and publisher is on the nodelet's single-threaded queue:
-  // nodelet::Loader may delete a nodelet inside a callback of one of its queues after the other
-  // queue is gone, and roscpp then crashes removing the callbacks of that other queue's
-  // publishers (seen with the diagnostics publisher on the multi-threaded queue).
+  // processed. Every publisher and every subscription but the images' is on the nodelet's
+  // single-threaded queue: nodelet::Loader may delete a nodelet inside a callback of one of its
+  // queues after the other queue is gone, and roscpp then crashes removing the callbacks of that
+  // other queue's publishers (seen with the diagnostics publisher on the multi-threaded queue).
+  // The image queue (images and camera_info) is this nodelet's own: shut down and drained in
+  // the destructor.
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
   diagnostics_->setHardwareID(camera_frame_.empty() ? "camera" : camera_frame_);
   diagnostics_->add("vitamin_e tracking", this, &TrackingNodelet::diagnose);
@@ -160,16 +184,23 @@ void TrackingNodelet::onInit() {
       return;
     }
   } else {
-    info_sub_ = nh.subscribe("camera_info", 1, &TrackingNodelet::cameraInfoCallback, this);
+    // On the images' queue: camera_info comes just before its image, and in one thread it is
+    // taken first (on another queue the first images would find no calibration yet).
+    info_sub_ = image_nh.subscribe("camera_info", 1, &TrackingNodelet::cameraInfoCallback, this);
     NODELET_INFO("no ~calibration_file: waiting for %s (%s)", info_sub_.getTopic().c_str(),
                  rectified_ ? "rectified image: P, no distortion" : "raw image: K and D");
   }
   if (!imu_topic_.empty()) {
-    // In the image callbacks' queue: samples arriving before an image are taken before it.
+    // On the nodelet's queue, which no frame holds up: every sample is taken as it arrives,
+    // before the SLAM thread reaches the frames of its time (gravity window before them).
     imu_sub_ = nh.subscribe(imu_topic_, 2000, &TrackingNodelet::imuCallback, this);
   }
-  if (!subscribeImages(nh, pnh, queue_size)) return;
-  publishBodyTransform();
+  publishBodyTransform();  // before any frame: the SLAM thread sends it later otherwise
+  if (!subscribeImages(image_nh, pnh, queue_size)) return;
+  image_thread_ = std::thread([this] {
+    // disable() (destructor) wakes the wait at once; the timeout only bounds an idle wait.
+    while (image_queue_.isEnabled()) image_queue_.callAvailable(ros::WallDuration(1.0));
+  });
 }
 
 bool TrackingNodelet::readFrameParameters(ros::NodeHandle& pnh) {
@@ -209,7 +240,7 @@ bool TrackingNodelet::readFrameParameters(ros::NodeHandle& pnh) {
   return true;
 }
 
-bool TrackingNodelet::subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& pnh, int queue_size) {
+bool TrackingNodelet::subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle& pnh, int queue_size) {
   // The transport is the nodelet's own ~image_transport (image_transport's default reads the
   // manager's private namespace instead).
   const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
@@ -218,7 +249,8 @@ bool TrackingNodelet::subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& pnh,
   const bool available = std::find(loadable.begin(), loadable.end(), "image_transport/" + transport_) != loadable.end() ||
                          std::find(loadable.begin(), loadable.end(), transport_) != loadable.end();
   const uint32_t queue = static_cast<uint32_t>(std::max(1, queue_size));
-  const char* mode = process_all_frames_ ? "every frame processed" : "live: stale frames dropped";
+  const char* mode = process_all_frames_ ? "every frame processed: the SLAM queue waits when full"
+                                         : "live: the SLAM takes the newest frame, stale frames are dropped";
   if (available) {
     image_sub_ = it_->subscribe("image", queue, &TrackingNodelet::imageCallback, this, hints);
     NODELET_INFO("subscribed to %s (transport %s, queue %d, %s)", image_sub_.getTopic().c_str(), transport_.c_str(),
@@ -227,8 +259,8 @@ bool TrackingNodelet::subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& pnh,
   }
   if (transport_ == "compressed") {
     // Debian's ROS has no compressed_image_transport: read the CompressedImage topic directly.
-    compressed_sub_ = nh.subscribe(nh.resolveName("image") + "/compressed", queue, &TrackingNodelet::compressedCallback,
-                                   this);
+    compressed_sub_ = image_nh.subscribe(image_nh.resolveName("image") + "/compressed", queue,
+                                         &TrackingNodelet::compressedCallback, this);
     NODELET_INFO("image_transport plugin 'compressed' not installed: subscribed to %s (sensor_msgs/CompressedImage, "
                  "decoded with OpenCV; queue %d, %s)",
                  compressed_sub_.getTopic().c_str(), queue_size, mode);
@@ -250,11 +282,12 @@ bool TrackingNodelet::createSystem(const vitamin_e::camera::Camera& camera) {
     return false;
   }
   camera_ = camera;
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    stats_.calibrated = true;
-  }
   NODELET_INFO("camera: %s", camera.describe().c_str());
+  bool localization_only = false;
+  {
+    std::lock_guard<std::mutex> lock(options_mutex_);
+    localization_only = dyn_.localization_only;
+  }
   if (loaded_map_) {
     try {
       system_->loadMap(*loaded_map_);
@@ -263,15 +296,41 @@ bool TrackingNodelet::createSystem(const vitamin_e::camera::Camera& camera) {
                     load_map_.c_str(), e.what());
       system_.reset();
       image_sub_.shutdown();
+      compressed_sub_.shutdown();
       info_sub_.shutdown();
       return false;
     }
     loaded_map_.reset();
     NODELET_INFO("relocalizing in the loaded map %s%s", load_map_.c_str(),
-                 dyn_.localization_only ? " (localization only)" : "");
+                 localization_only ? " (localization only)" : "");
   }
-  system_->setLocalizationOnly(dyn_.localization_only);
+  system_->setLocalizationOnly(localization_only);
+  updateSnapshot();
+  // From here on system_ and the [SLAM] state are the SLAM thread's (the thread's start orders
+  // the writes above before its first read).
+  camera_width_ = camera.width();
+  camera_height_ = camera.height();
+  slam_thread_ = std::thread([this] { slamLoop(); });
+  calibrated_ = true;
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.calibrated = true;
+  }
   return true;
+}
+
+void TrackingNodelet::stopThreads() {
+  // The order makes the shutdown deterministic: a callback blocked on the full queue is woken
+  // (the frame is discarded) before its subscription is shut down (which waits for it), and
+  // the SLAM thread ends its frame (a held one is discarded) before the publishers go away.
+  if (queue_) queue_->close();
+  image_sub_.shutdown();
+  compressed_sub_.shutdown();
+  info_sub_.shutdown();
+  image_queue_.disable();
+  if (image_thread_.joinable()) image_thread_.join();
+  image_queue_.clear();
+  if (slam_thread_.joinable()) slam_thread_.join();
 }
 
 TrackingNodelet::~TrackingNodelet() {
@@ -283,13 +342,16 @@ TrackingNodelet::~TrackingNodelet() {
     diagnostics_wake_.notify_all();
     diagnostics_thread_.join();
   }
-  std::lock_guard<std::mutex> lock(mutex_);
+  stopThreads();
+  // The SLAM thread has ended: its state is this thread's now.
   if (system_) {  // stderr: rosout may be gone at shutdown
+    const auto q = queue_->counts();
     std::fprintf(stderr,
-                 "[vitamin_e] %zu frames processed, %zu tracked, %d init retries, %d relocalizations, %u segment(s)\n%s",
+                 "[vitamin_e] %zu frames processed, %zu tracked, %d init retries, %d relocalizations, %u segment(s); "
+                 "%zu frames dropped by the live queue, %zu still queued at shutdown (not processed)\n%s",
                  finished_processed_ + system_->framesProcessed(), finished_tracked_ + system_->framesTracked(),
                  finished_retries_ + system_->initRetries(), finished_relocalizations_ + system_->relocalizations(),
-                 segment_, system_->timings().table().c_str());
+                 segment_, q.dropped, q.discarded, system_->timings().table().c_str());
   }
   std::string message;
   if (system_ && !trajectory_file_.empty()) {
@@ -311,8 +373,7 @@ TrackingNodelet::~TrackingNodelet() {
 }
 
 void TrackingNodelet::cameraInfoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (system_) {
+  if (calibrated_) {
     info_sub_.shutdown();
     return;
   }
@@ -342,7 +403,7 @@ void TrackingNodelet::imageCallback(const sensor_msgs::ImageConstPtr& msg) {
     NODELET_ERROR_THROTTLE(2.0, "image dropped: %s", error.c_str());
     return;
   }
-  processFrame(gray, msg->header);
+  enqueue(std::move(gray), msg->header);
 }
 
 void TrackingNodelet::compressedCallback(const sensor_msgs::CompressedImageConstPtr& msg) {
@@ -354,21 +415,84 @@ void TrackingNodelet::compressedCallback(const sensor_msgs::CompressedImageConst
     NODELET_ERROR_THROTTLE(2.0, "image dropped: %s", error.c_str());
     return;
   }
-  processFrame(gray, msg->header);
+  enqueue(std::move(gray), msg->header);
 }
 
-void TrackingNodelet::processFrame(const cv::Mat& gray, const std_msgs::Header& header) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (!system_) {
+void TrackingNodelet::enqueue(cv::Mat gray, const std_msgs::Header& header) {
+  if (!calibrated_) {
     noteRejected();
     NODELET_WARN_THROTTLE(5.0, "image dropped: no calibration yet (set ~calibration_file or publish camera_info)");
     return;
   }
-  if (gray.cols != camera_.width() || gray.rows != camera_.height()) {
+  if (gray.cols != camera_width_ || gray.rows != camera_height_) {
     noteRejected();
     NODELET_ERROR_THROTTLE(2.0, "image dropped: size %dx%d, calibration is %dx%d", gray.cols, gray.rows,
-                           camera_.width(), camera_.height());
+                           camera_width_, camera_height_);
     return;
+  }
+  QueuedFrame frame;
+  frame.gray = std::move(gray);
+  frame.header = header;
+  frame.received_wall = ros::WallTime::now().toSec();
+  queue_->push(std::move(frame));  // false only when shutting down
+}
+
+void TrackingNodelet::slamLoop() {
+  std::optional<QueuedFrame> frame;
+  SlamQueue<QueuedFrame>::Command command;
+  while (queue_->next(&frame, &command)) {
+    if (command) {
+      command();
+      continue;
+    }
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      stats_.queue_wait_s.push_back(ros::WallTime::now().toSec() - frame->received_wall);
+      while (stats_.queue_wait_s.size() > 200) stats_.queue_wait_s.pop_front();
+    }
+    // ~debug_frame_delay: the frame is in progress for that long (a slow SLAM, for tests);
+    // shutting down ends the wait, and the frame is not processed.
+    if (debug_frame_delay_s_ > 0.0 && !queue_->waitFor(debug_frame_delay_s_)) continue;
+    processFrame(*frame);
+  }
+}
+
+bool TrackingNodelet::runOnSlamThread(const std::function<void()>& work, std::string* why) {
+  if (!calibrated_) {
+    *why = "no SLAM system yet (waiting for calibration)";
+    return false;
+  }
+  auto done = std::make_shared<std::promise<void>>();
+  std::future<void> finished = done->get_future();
+  const bool posted = queue_->post([&work, done] {
+    try {
+      work();
+      done->set_value();
+    } catch (...) {
+      done->set_exception(std::current_exception());
+    }
+  });
+  if (!posted) {
+    *why = "shutting down";
+    return false;
+  }
+  try {
+    finished.get();  // the frame in progress, if any, then this work: never the queued frames
+  } catch (const std::exception& e) {
+    *why = e.what();
+    return false;
+  }
+  return true;
+}
+
+void TrackingNodelet::processFrame(const QueuedFrame& frame) {
+  const std_msgs::Header& header = frame.header;
+  {
+    std::lock_guard<std::mutex> lock(options_mutex_);
+    options_ = dyn_;
+  }
+  if (system_->localizationOnly() != options_.localization_only) {
+    system_->setLocalizationOnly(options_.localization_only);
   }
   if (have_last_stamp_ && header.stamp <= last_stamp_) {
     const double back = (last_stamp_ - header.stamp).toSec();
@@ -394,7 +518,7 @@ void TrackingNodelet::processFrame(const cv::Mat& gray, const std_msgs::Header& 
   const auto start = std::chrono::steady_clock::now();
   FrameResult result;
   try {
-    result = system_->process(gray, header.stamp.toSec(), stampText(header.stamp.sec, header.stamp.nsec));
+    result = system_->process(frame.gray, header.stamp.toSec(), stampText(header.stamp.sec, header.stamp.nsec));
   } catch (const std::exception& e) {
     noteRejected();
     NODELET_ERROR_THROTTLE(2.0, "frame %.9f not processed: %s", header.stamp.toSec(), e.what());
@@ -407,6 +531,7 @@ void TrackingNodelet::processFrame(const cv::Mat& gray, const std_msgs::Header& 
     std::lock_guard<std::mutex> imu_lock(imu_mutex_);
     gravity_.dropBefore(header.stamp.toSec() - gravity_window_s_ - 1.0);
   }
+  updateSnapshot();
   // Everything published is in the map frame: T_map_c = T_map_w T_w_c, p_map = T_map_w p_w.
   if (have_map_) {
     result.T_w_c = T_map_w_ * result.T_w_c;
@@ -414,25 +539,43 @@ void TrackingNodelet::processFrame(const cv::Mat& gray, const std_msgs::Header& 
       if (p.has_position) p.p_w = T_map_w_ * p.p_w;
     }
   }
-  publishResult(result, header, gray, ms);
+  publishResult(result, frame, ms);
+}
+
+void TrackingNodelet::updateSnapshot() {
+  const auto& trajectory = system_->trajectory();
+  const std::string note = segmentNote();
+  std::lock_guard<std::mutex> lock(snapshot_mutex_);
+  auto& current = snapshot_.current;
+  // Poses are appended, and only the newest is refined within its own frame: copy from the
+  // last one copied (all of them if the trajectory is not the one copied so far).
+  std::size_t from = current.empty() ? 0 : current.size() - 1;
+  if (trajectory.size() < current.size()) from = 0;
+  current.resize(from);
+  current.insert(current.end(), trajectory.begin() + static_cast<std::ptrdiff_t>(from), trajectory.end());
+  snapshot_.T_map_w = T_map_w_;
+  snapshot_.note = note;
 }
 
 void TrackingNodelet::startSegment(const std::string& why) {
-  if (system_) {
+  {
+    std::lock_guard<std::mutex> lock(snapshot_mutex_);
     TrajectorySegment done;
     done.note = segmentNote();
     for (auto e : system_->trajectory()) {
       e.T_w_c = T_map_w_ * e.T_w_c;
       done.poses.push_back(e);
     }
-    if (!done.poses.empty()) finished_.push_back(std::move(done));
-    finished_processed_ += system_->framesProcessed();
-    finished_tracked_ += system_->framesTracked();
-    finished_retries_ += system_->initRetries();
-    finished_relocalizations_ += system_->relocalizations();
-    // A fresh system: no map, no tracks and no last stamp (System::reset keeps the stamp).
-    system_ = std::make_unique<vitamin_e::pipeline::System>(system_config_, camera_);
+    if (!done.poses.empty()) snapshot_.finished.push_back(std::move(done));
+    snapshot_.current.clear();
   }
+  finished_processed_ += system_->framesProcessed();
+  finished_tracked_ += system_->framesTracked();
+  finished_retries_ += system_->initRetries();
+  finished_relocalizations_ += system_->relocalizations();
+  // A fresh system: no map, no tracks and no last stamp (System::reset keeps the stamp).
+  system_ = std::make_unique<vitamin_e::pipeline::System>(system_config_, camera_);
+  system_->setLocalizationOnly(options_.localization_only);
   ++segment_;
   segment_note_ = why;
   have_last_stamp_ = false;
@@ -443,6 +586,7 @@ void TrackingNodelet::startSegment(const std::string& why) {
   track_history_.clear();
   path_.poses.clear();
   path_pub_.publish(path_);
+  updateSnapshot();
   std::lock_guard<std::mutex> lock(stats_mutex_);
   stats_.segment = segment_;
 }
@@ -452,70 +596,90 @@ std::string TrackingNodelet::segmentNote() const {
   return segment_note_ + (map_description_.empty() ? "" : "; " + map_description_);
 }
 
-std::vector<TrajectorySegment> TrackingNodelet::segments() const {
-  std::vector<TrajectorySegment> all = finished_;
-  if (system_) {
-    TrajectorySegment current;
-    current.note = segmentNote();
-    for (auto e : system_->trajectory()) {
-      e.T_w_c = T_map_w_ * e.T_w_c;
-      current.poses.push_back(e);
-    }
-    if (!current.poses.empty() || all.empty()) all.push_back(std::move(current));
-  }
-  return all;
-}
-
 void TrackingNodelet::reconfigure(vitamin_e::TrackingConfig& config, uint32_t) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (system_ && config.localization_only != dyn_.localization_only) {
-    NODELET_INFO("localization only %s", config.localization_only ? "on: the map is not changed" : "off");
+  // Taken by the SLAM thread at its next frame; never waits for the one in progress.
+  std::lock_guard<std::mutex> lock(options_mutex_);
+  if (calibrated_ && config.localization_only != dyn_.localization_only) {
+    NODELET_INFO("localization only %s (from the next frame)",
+                 config.localization_only ? "on: the map is not changed" : "off");
   }
   dyn_ = config;
-  if (system_) system_->setLocalizationOnly(dyn_.localization_only);
 }
 
 bool TrackingNodelet::resetService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (!system_) {
-    res.success = false;
-    res.message = "no SLAM system yet (waiting for calibration)";
+  unsigned segment = 0;
+  std::string why;
+  res.success = runOnSlamThread(
+      [&] {
+        startSegment("~reset");
+        segment = segment_;
+      },
+      &why);
+  if (!res.success) {
+    res.message = why;
     return true;
   }
-  startSegment("~reset");
-  res.success = true;
-  res.message = "map, tracks, last stamp and path reset; trajectory segment " + std::to_string(segment_) +
+  res.message = "map, tracks, last stamp and path reset; trajectory segment " + std::to_string(segment) +
                 " begins (earlier segments kept)";
   NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 
 bool TrackingNodelet::saveTrajectory(const std::string& path, std::string* message) {
-  std::string error;
-  if (!system_) {
+  if (!calibrated_) {
     *message = "no SLAM system yet";
     return false;
   }
-  const auto all = segments();
+  // A copy of the snapshot: the SLAM thread goes on while the file is written.
+  std::vector<TrajectorySegment> all;
+  {
+    std::lock_guard<std::mutex> lock(snapshot_mutex_);
+    all = snapshot_.finished;
+    TrajectorySegment current;
+    current.note = snapshot_.note;
+    current.poses.reserve(snapshot_.current.size());
+    for (auto e : snapshot_.current) {
+      e.T_w_c = snapshot_.T_map_w * e.T_w_c;
+      current.poses.push_back(e);
+    }
+    if (!current.poses.empty() || all.empty()) all.push_back(std::move(current));
+  }
   std::size_t poses = 0;
   for (const auto& s : all) poses += s.poses.size();
   const std::string header = "T_map_c: camera (optical) in '" + map_frame_ + "'; each segment has its own map";
+  std::string error;
   if (!saveSegmentsTum(all, header, path, &error)) {
     *message = "cannot write trajectory " + path + ": " + error;
     return false;
   }
   *message = "trajectory (" + std::to_string(poses) + " poses in " + std::to_string(all.size()) +
              " segment(s), TUM) written to " + path;
+  if (queue_) {
+    // Said, so that a caller knows the file is a snapshot of a run still going on.
+    const auto q = queue_->counts();
+    const std::size_t pending = q.waiting + (q.busy ? 1 : 0);
+    if (pending > 0) *message += "; " + std::to_string(pending) + " frame(s) not processed yet";
+  }
   return true;
 }
 
 bool TrackingNodelet::saveMap(const std::string& path, std::string* message) {
+  return writeMap(system_->exportMap(), path, message);
+}
+
+bool TrackingNodelet::exportPoints(const std::string& path, std::string* message) {
+  return writePoints(mapPointsInMap(), path, message);
+}
+
+std::vector<vitamin_e::pipeline::MapPoint3> TrackingNodelet::mapPointsInMap() const {
+  auto points = system_->mapPoints();
+  for (auto& p : points) p.p_w = T_map_w_ * p.p_w;
+  return points;
+}
+
+bool TrackingNodelet::writeMap(const vitamin_e::map::MapFileContents& contents, const std::string& path,
+                               std::string* message) {
   std::string error;
-  if (!system_) {
-    *message = "no SLAM system yet";
-    return false;
-  }
-  const vitamin_e::map::MapFileContents contents = system_->exportMap();
   if (!vitamin_e::map::saveMapFile(contents, path, &error)) {
     *message = "cannot write map " + path + ": " + error;
     return false;
@@ -524,14 +688,9 @@ bool TrackingNodelet::saveMap(const std::string& path, std::string* message) {
   return true;
 }
 
-bool TrackingNodelet::exportPoints(const std::string& path, std::string* message) {
+bool TrackingNodelet::writePoints(const std::vector<vitamin_e::pipeline::MapPoint3>& points, const std::string& path,
+                                  std::string* message) {
   std::string error;
-  if (!system_) {
-    *message = "no SLAM system yet";
-    return false;
-  }
-  auto points = system_->mapPoints();
-  for (auto& p : points) p.p_w = T_map_w_ * p.p_w;
   if (!vitamin_e::pipeline::saveMapPly(points, path, &error)) {
     *message = "cannot write map points " + path + ": " + error;
     return false;
@@ -541,7 +700,6 @@ bool TrackingNodelet::exportPoints(const std::string& path, std::string* message
 }
 
 bool TrackingNodelet::saveTrajectoryService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
   const std::string path = req.path.empty() ? trajectory_file_ : req.path;
   if (path.empty()) {
     res.success = false;
@@ -554,27 +712,40 @@ bool TrackingNodelet::saveTrajectoryService(vitamin_e::SaveFile::Request& req, v
 }
 
 bool TrackingNodelet::saveMapService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
   const std::string path = req.path.empty() ? save_map_ : req.path;
   if (path.empty()) {
     res.success = false;
     res.message = "no path given and ~save_map not set";
     return true;
   }
-  res.success = saveMap(path, &res.message);
+  // The map is the SLAM thread's: copied there between two frames, written here.
+  vitamin_e::map::MapFileContents contents;
+  std::string why;
+  if (runOnSlamThread([&] { contents = system_->exportMap(); }, &why)) {
+    res.success = writeMap(contents, path, &res.message);
+  } else {
+    res.success = false;
+    res.message = why;
+  }
   NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 
 bool TrackingNodelet::exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
   const std::string path = req.path.empty() ? export_points_ : req.path;
   if (path.empty()) {
     res.success = false;
     res.message = "no path given and ~export_points not set";
     return true;
   }
-  res.success = exportPoints(path, &res.message);
+  std::vector<vitamin_e::pipeline::MapPoint3> points;
+  std::string why;
+  if (runOnSlamThread([&] { points = mapPointsInMap(); }, &why)) {
+    res.success = writePoints(points, path, &res.message);
+  } else {
+    res.success = false;
+    res.message = why;
+  }
   NODELET_INFO("%s", res.message.c_str());
   return true;
 }

@@ -3,8 +3,24 @@
 // clouds, status, diagnostics, per-frame messages for the mesher) out. A thin
 // layer: every estimate comes from pipeline::System; this class converts,
 // re-expresses in the map frame (map_frame.h) and publishes.
+//
+// Threads (issue 15, item 8):
+//   image thread   own callback queue (image_queue_): camera_info (calibration, starts the
+//                  SLAM thread), then converts each image and pushes it into queue_ (live:
+//                  newest only; ~process_all_frames: blocks when full)
+//   SLAM thread    owns system_ and everything marked [SLAM] below: takes the frames (and
+//                  the commands the services post) from queue_, runs the SLAM, publishes
+//   nodelet queue  (single-threaded) IMU, services, dynamic_reconfigure: they
+//                  never wait for a frame being processed; ~save_trajectory reads a snapshot,
+//                  ~reset / ~save_map / ~export_points run on the SLAM thread between two
+//                  frames (ahead of the waiting ones) and wait for that
+//   diagnostics    own thread, reads the statistics and the queue's counts
+// Shutdown (destructor): diagnostics stopped, queue closed, image subscriptions shut down,
+// image thread and SLAM thread joined, files saved; only then the publishers go.
+#include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -17,6 +33,7 @@
 #include <image_transport/image_transport.h>
 #include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
@@ -32,6 +49,7 @@
 #include "vitamin_e/TrackingConfig.h"
 #include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/ros/map_frame.h"
+#include "vitamin_e/ros/slam_queue.h"
 #include "vitamin_e/ros/trajectory_segments.h"
 
 namespace vitamin_e_ros {
@@ -42,32 +60,57 @@ class TrackingNodelet : public nodelet::Nodelet {
   ~TrackingNodelet() override;
 
  private:
+  // A converted image waiting for the SLAM thread.
+  struct QueuedFrame {
+    cv::Mat gray;
+    std_msgs::Header header;
+    double received_wall = 0.0;  // when the callback queued it (queue wait in the diagnostics)
+  };
+
   void onInit() override;
   bool readFrameParameters(ros::NodeHandle& pnh);
-  bool subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& pnh, int queue_size);
+  bool subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle& pnh, int queue_size);
+  // Builds system_ (and loads ~load_map), then starts the SLAM thread.
   bool createSystem(const vitamin_e::camera::Camera& camera);
   void imageCallback(const sensor_msgs::ImageConstPtr& msg);
   void compressedCallback(const sensor_msgs::CompressedImageConstPtr& msg);
+  // The image callbacks' end: the calibration's size checked, the frame queued.
+  void enqueue(cv::Mat gray, const std_msgs::Header& header);
   void cameraInfoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void imuCallback(const sensor_msgs::ImuConstPtr& msg);
-  // Everything after the decoding: checks, time jumps, SLAM, publishing (takes mutex_).
-  void processFrame(const cv::Mat& gray, const std_msgs::Header& header);
   void reconfigure(vitamin_e::TrackingConfig& config, uint32_t level);
   bool resetService(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool saveTrajectoryService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
   bool saveMapService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
   bool exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
+  // The trajectory from the snapshot (any thread).
   bool saveTrajectory(const std::string& path, std::string* message);
-  bool saveMap(const std::string& path, std::string* message);       // the map file (~load_map reads it)
-  bool exportPoints(const std::string& path, std::string* message);  // the map points as PLY
-  // Ends the current SLAM run (its poses become a finished segment) and starts a fresh one:
-  // no map, no last stamp, an empty path (mutex_ held).
-  void startSegment(const std::string& why);
-  // Poses of the finished segments and the current one, in the map frame (mutex_ held).
-  std::vector<TrajectorySegment> segments() const;
-  std::string segmentNote() const;
+  // The map file / the map points as PLY, from system_: after the SLAM thread has ended.
+  bool saveMap(const std::string& path, std::string* message);
+  bool exportPoints(const std::string& path, std::string* message);
+  // system_'s map points in the map frame: on the SLAM thread (or after it has ended).
+  std::vector<vitamin_e::pipeline::MapPoint3> mapPointsInMap() const;
+  bool writeMap(const vitamin_e::map::MapFileContents& contents, const std::string& path, std::string* message);
+  bool writePoints(const std::vector<vitamin_e::pipeline::MapPoint3>& points, const std::string& path,
+                   std::string* message);
+  // Runs `work` on the SLAM thread before its next frame and waits for it (services). False
+  // (and *why) when there is no SLAM thread or it is shutting down.
+  bool runOnSlamThread(const std::function<void()>& work, std::string* why);
+  // Closes the queue, stops the image thread and joins the SLAM thread (destructor).
+  void stopThreads();
 
-  // The map frame (tracking_map_frame.cpp); mutex_ held.
+  // The SLAM thread (all [SLAM] state).
+  void slamLoop();
+  // Stamp checks, time jumps, SLAM, map frame, publishing.
+  void processFrame(const QueuedFrame& frame);
+  // Ends the current SLAM run (its poses become a finished segment) and starts a fresh one:
+  // no map, no last stamp, an empty path.
+  void startSegment(const std::string& why);
+  std::string segmentNote() const;
+  // The services' copy of the trajectory, after every frame and segment change.
+  void updateSnapshot();
+
+  // The map frame (tracking_map_frame.cpp); SLAM thread.
   void alignMap(const vitamin_e::pipeline::FrameResult& result);
   bool imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* why);
   // The camera's mounting on ~base_frame (static): from the calibration when ~base_frame is
@@ -75,9 +118,8 @@ class TrackingNodelet : public nodelet::Nodelet {
   bool cameraToBase(Eigen::Isometry3d* T_c_base, std::string* why, double timeout_s = 0.0);
   void publishBodyTransform();
 
-  // Publishing (tracking_publish.cpp); mutex_ held. `result` is in the map frame.
-  void publishResult(const vitamin_e::pipeline::FrameResult& result, const std_msgs::Header& header,
-                     const cv::Mat& gray, double ms);
+  // Publishing (tracking_publish.cpp); SLAM thread. `result` is in the map frame.
+  void publishResult(const vitamin_e::pipeline::FrameResult& result, const QueuedFrame& frame, double ms);
   void publishPose(const vitamin_e::pipeline::FrameResult& result, const std_msgs::Header& header);
   void publishPath(const geometry_msgs::PoseStampedConstPtr& stamped);
   void publishTf(const Eigen::Isometry3d& T_map_c, const ros::Time& stamp);
@@ -91,6 +133,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   struct Stats {
     std::deque<double> received_wall, processed_wall;  // wall times over the last window
     std::deque<double> latency_s;                      // image stamp -> published pose
+    std::deque<double> queue_wait_s;                   // queued -> taken by the SLAM thread
     double last_stamp = 0.0, period_s = 0.0;           // input period from the stamps (median)
     std::deque<double> stamp_deltas;
     std::size_t received = 0, processed = 0, rejected = 0, gap_dropped = 0;
@@ -105,7 +148,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   void noteRejected();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
-  // Parameters (read once in onInit).
+  // Parameters (read once in onInit, constant afterwards).
   std::string map_frame_ = "map";
   std::string camera_frame_;  // empty: the image's frame_id
   std::string odom_frame_;
@@ -123,12 +166,21 @@ class TrackingNodelet : public nodelet::Nodelet {
   double gravity_window_s_ = 1.0;
   bool reset_on_time_jump_ = true;
   double time_jump_threshold_s_ = 1.0;
+  double debug_frame_delay_s_ = 0.0;  // ~debug_frame_delay: each frame held this long (tests)
   bool rectified_ = false;
   bool have_calibration_file_ = false;
   Eigen::Isometry3d T_b_c_ = Eigen::Isometry3d::Identity();  // from ~calibration_file
 
-  std::mutex mutex_;  // guards everything below (callbacks, services, reconfigure)
+  // The camera's size for the callbacks' check, set before calibrated_.
+  int camera_width_ = 0, camera_height_ = 0;
+  std::atomic<bool> calibrated_{false};  // system_ exists and the SLAM thread runs
+
+  // Reconfigure writes, the SLAM thread copies per frame (never held while processing).
+  std::mutex options_mutex_;
   vitamin_e::TrackingConfig dyn_;
+
+  // [SLAM] state: the SLAM thread's alone once it runs (the destructor's after the join).
+  vitamin_e::TrackingConfig options_;  // dyn_ as of the current frame
   vitamin_e::pipeline::SystemConfig system_config_;
   vitamin_e::camera::Camera camera_;
   std::unique_ptr<vitamin_e::pipeline::System> system_;
@@ -138,8 +190,6 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::string frame_id_;  // camera frame in use
   nav_msgs::Path path_;
   std::map<std::uint64_t, std::deque<cv::Point2f>> track_history_;
-  // Segments: one per SLAM run; the current one is system_'s trajectory.
-  std::vector<TrajectorySegment> finished_;
   std::string segment_note_ = "start";
   unsigned segment_ = 1;
   std::size_t finished_processed_ = 0, finished_tracked_ = 0;
@@ -152,6 +202,17 @@ class TrackingNodelet : public nodelet::Nodelet {
   Eigen::Isometry3d T_c_base_ = Eigen::Isometry3d::Identity();
   bool body_tf_sent_ = false;
 
+  // What ~save_trajectory reads: the finished segments (map frame) and the current one's
+  // poses in the core's world with its T_map_w. The SLAM thread appends per frame.
+  struct TrajectorySnapshot {
+    std::vector<TrajectorySegment> finished;
+    std::vector<vitamin_e::pipeline::TrajectoryEntry> current;
+    Eigen::Isometry3d T_map_w = Eigen::Isometry3d::Identity();
+    std::string note;
+  };
+  std::mutex snapshot_mutex_;
+  TrajectorySnapshot snapshot_;
+
   std::mutex imu_mutex_;  // the accelerometer window (IMU callbacks run beside the SLAM)
   GravityWindow gravity_;
   std::string imu_frame_;
@@ -159,6 +220,13 @@ class TrackingNodelet : public nodelet::Nodelet {
 
   std::mutex stats_mutex_;
   Stats stats_;
+
+  std::unique_ptr<SlamQueue<QueuedFrame>> queue_;
+  std::thread slam_thread_;
+  // The image subscriptions' own callback queue and thread: a callback blocked on a full
+  // queue_ (bag mode) holds up nothing else. Declared before the subscribers (outlives them).
+  ros::CallbackQueue image_queue_;
+  std::thread image_thread_;
 
   std::unique_ptr<image_transport::ImageTransport> it_;
   image_transport::Subscriber image_sub_;

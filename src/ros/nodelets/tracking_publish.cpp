@@ -1,5 +1,6 @@
-// TrackingNodelet: FrameResult (already in the map frame) -> messages. Every pose and
-// point is checked finite before it is published (a non-finite one is skipped with a
+// TrackingNodelet: FrameResult (already in the map frame) -> messages, on the SLAM thread
+// (the publishing options are options_, the frame's copy of the reconfigure values). Every
+// pose and point is checked finite before it is published (a non-finite one is skipped with a
 // throttled error).
 #include <cmath>
 
@@ -21,8 +22,8 @@ namespace vitamin_e_ros {
 using vitamin_e::pipeline::FrameResult;
 using vitamin_e::pipeline::TrackingState;
 
-void TrackingNodelet::publishResult(const FrameResult& result, const std_msgs::Header& header, const cv::Mat& gray,
-                                    double ms) {
+void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame& frame, double ms) {
+  const std_msgs::Header& header = frame.header;
   vitamin_e::TrackingStatusPtr status(new vitamin_e::TrackingStatus);
   status->header = header;
   status->header.frame_id = frame_id_;
@@ -66,21 +67,21 @@ void TrackingNodelet::publishResult(const FrameResult& result, const std_msgs::H
   if (result.pose_valid) {
     if (isFinite(result.T_w_c)) {
       publishPose(result, header);
-      if (dyn_.publish_tf) publishTf(result.T_w_c, header.stamp);
-      if (dyn_.publish_points && points_pub_.getNumSubscribers() > 0) publishPoints(result, header);
+      if (options_.publish_tf) publishTf(result.T_w_c, header.stamp);
+      if (options_.publish_points && points_pub_.getNumSubscribers() > 0) publishPoints(result, header);
       if (frame_pub_.getNumSubscribers() > 0) publishFrame(result, header);
     } else {
       NODELET_ERROR_THROTTLE(2.0, "frame %lu: non-finite pose not published",
                              static_cast<unsigned long>(result.frame_index));
     }
   }
-  if (dyn_.map_points_period > 0.0 && map_points_pub_.getNumSubscribers() > 0 &&
-      (last_map_points_.isZero() || (header.stamp - last_map_points_).toSec() >= dyn_.map_points_period ||
+  if (options_.map_points_period > 0.0 && map_points_pub_.getNumSubscribers() > 0 &&
+      (last_map_points_.isZero() || (header.stamp - last_map_points_).toSec() >= options_.map_points_period ||
        header.stamp < last_map_points_)) {
     publishMapPoints(header.stamp);
     last_map_points_ = header.stamp;
   }
-  if (tracking_image_pub_.getNumSubscribers() > 0) publishTrackingImage(result, header, gray);
+  if (tracking_image_pub_.getNumSubscribers() > 0) publishTrackingImage(result, header, frame.gray);
 }
 
 void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Header& header) {
@@ -128,8 +129,8 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
 void TrackingNodelet::publishPath(const geometry_msgs::PoseStampedConstPtr& stamped) {
   path_.header.stamp = stamped->header.stamp;
   path_.poses.push_back(*stamped);
-  if (dyn_.path_max_poses > 0 && path_.poses.size() > static_cast<std::size_t>(dyn_.path_max_poses)) {
-    path_.poses.erase(path_.poses.begin(), path_.poses.end() - dyn_.path_max_poses);
+  if (options_.path_max_poses > 0 && path_.poses.size() > static_cast<std::size_t>(options_.path_max_poses)) {
+    path_.poses.erase(path_.poses.begin(), path_.poses.end() - options_.path_max_poses);
   }
   if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
 }
@@ -186,7 +187,7 @@ void TrackingNodelet::publishPoints(const FrameResult& result, const std_msgs::H
       ++skipped;
       continue;
     }
-    if (dyn_.points_max_depth > 0.0 && (T_c_w * p.p_w).z() > dyn_.points_max_depth) continue;
+    if (options_.points_max_depth > 0.0 && (T_c_w * p.p_w).z() > options_.points_max_depth) continue;
     points.push_back(p.p_w.cast<float>());
     intensity.push_back(p.intensity);
   }
@@ -261,7 +262,7 @@ void TrackingNodelet::publishTrackingImage(const FrameResult& result, const std_
   out.header = header;
   out.encoding = sensor_msgs::image_encodings::BGR8;
   cv::cvtColor(gray, out.image, cv::COLOR_GRAY2BGR);
-  const std::size_t history = static_cast<std::size_t>(std::max(0, dyn_.draw_track_length));
+  const std::size_t history = static_cast<std::size_t>(std::max(0, options_.draw_track_length));
   std::map<std::uint64_t, std::deque<cv::Point2f>> alive;
   for (const auto& p : result.points) {
     if (!p.uv.allFinite()) continue;
