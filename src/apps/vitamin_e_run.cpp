@@ -286,7 +286,7 @@ int run(const Options& o) {
   std::unique_ptr<vitamin_e::fusion::DenseMapper> dense;
   if (config.dense_enabled) {
     dense = std::make_unique<vitamin_e::fusion::DenseMapper>(
-        config.dense, vitamin_e::meshing::pinholeIntrinsicsOf(calib.camera));
+        config.dense, vitamin_e::meshing::pinholeImageOf(calib.camera));
   }
   if ((!o.load_tsdf.empty() || !o.save_tsdf.empty()) && !dense) {
     fail("--load-tsdf / --save-tsdf need the dense reconstruction (dense_enabled is false in the config)");

@@ -135,11 +135,7 @@ inline void addRank2(Matrix6d* S, const Matrix26d& Jl, const Eigen::Matrix2d& M,
 
 }  // namespace
 
-SubspaceGn::SubspaceGn(BaProblem& p, const BaOptions& o) : P_(p), O_(o), kernel_(o.robust_sigma_px) {
-  K_.fx = p.fx;
-  K_.fy = p.fy;
-  K_.cx = p.cx;
-  K_.cy = p.cy;
+SubspaceGn::SubspaceGn(BaProblem& p, const BaOptions& o) : P_(p), O_(o), kernel_(o.robust_sigma_px), K_(p.K) {
   buildStructure();
   const int npf = freePoints();
   T_ = std::max(1, std::min(O_.threads, npf / 256));

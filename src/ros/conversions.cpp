@@ -15,6 +15,7 @@ namespace enc = sensor_msgs::image_encodings;
 using vitamin_e::camera::Camera;
 using vitamin_e::camera::CalibrationError;
 using vitamin_e::camera::DistortionModel;
+using vitamin_e::camera::Pinhole;
 
 bool isFinite(const Eigen::Isometry3d& T) {
   if (!T.matrix().allFinite()) return false;
@@ -140,20 +141,17 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
   const int width = static_cast<int>(full_w / bx);
   const int height = static_cast<int>(full_h / by);
   if (roi) {
-    cx -= info.roi.x_offset;
-    cy -= info.roi.y_offset;
+    K.cx -= info.roi.x_offset;
+    K.cy -= info.roi.y_offset;
   }
-  // A binned pixel u covers full-resolution pixels [bx u, bx u + bx): its centre is at
-  // bx u + (bx - 1) / 2 (image_geometry's cx / bx drops that half-pixel shift).
-  fx /= bx;
-  cx = (cx + 0.5) / bx - 0.5;
-  fy /= by;
-  cy = (cy + 0.5) / by - 0.5;
+  // Pinhole::binned keeps the binned pixel's centre (image_geometry's cx / bx drops that
+  // half-pixel shift).
+  K = K.binned(bx, by);
 
   const std::string& m = info.distortion_model;
   std::vector<double> d(info.D.begin(), info.D.end());
   const bool all_zero = std::all_of(d.begin(), d.end(), [](double v) { return v == 0.0; });
-  if (rectified || d.empty() || all_zero) return Camera(width, height, fx, fy, cx, cy);
+  if (rectified || d.empty() || all_zero) return Camera(width, height, K);
   if (m == "plumb_bob" || m == "rational_polynomial") {
     // The core's radial-tangential model has k1 k2 p1 p2 k3: refuse what it would silently drop.
     for (std::size_t k = 5; k < d.size(); ++k) {
@@ -166,10 +164,10 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
     }
     if (d.size() > 5) d.resize(5);
     if (d.size() == 5 && d[4] == 0.0) d.resize(4);
-    return Camera(width, height, fx, fy, cx, cy, DistortionModel::kRadialTangential, d);
+    return Camera(width, height, K, DistortionModel::kRadialTangential, d);
   }
   if (m == "equidistant" || m == "fisheye") {
-    return Camera(width, height, fx, fy, cx, cy, DistortionModel::kEquidistant, d);
+    return Camera(width, height, K, DistortionModel::kEquidistant, d);
   }
   throw CalibrationError("camera_info: unsupported distortion_model '" + m + "'");
 }

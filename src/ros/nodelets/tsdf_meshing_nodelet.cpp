@@ -158,13 +158,9 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
                              static_cast<unsigned long>(msg->frame_index));
       return;
     }
-    meshing::PinholeIntrinsics K;
-    K.fx = msg->fx;
-    K.fy = msg->fy;
-    K.cx = msg->cx;
-    K.cy = msg->cy;
-    K.width = static_cast<int>(msg->width);
-    K.height = static_cast<int>(msg->height);
+    const meshing::PinholeImage image{{msg->fx, msg->fy, msg->cx, msg->cy},
+                                      static_cast<int>(msg->width),
+                                      static_cast<int>(msg->height)};
     std::vector<Eigen::Vector3d> p_c;
     p_c.reserve(n);
     for (const auto& p : msg->points_c) p_c.emplace_back(p.x, p.y, p.z);
@@ -182,16 +178,15 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     }
     segment_ = msg->segment;
     try {
-      K.validate();
+      image.validate();
       if (!dense_) {
-        dense_ = std::make_unique<fusion::DenseMapper>(dense_config_, K);
-        dense_K_ = K;
+        dense_ = std::make_unique<fusion::DenseMapper>(dense_config_, image);
+        dense_image_ = image;
         if (loaded_tsdf_) {
           dense_->loadTsdf(load_tsdf_);  // the file checked at start-up
           loaded_tsdf_.reset();
         }
-      } else if (K.fx != dense_K_.fx || K.fy != dense_K_.fy || K.cx != dense_K_.cx || K.cy != dense_K_.cy ||
-                 K.width != dense_K_.width || K.height != dense_K_.height) {
+      } else if (image != dense_image_) {
         NODELET_ERROR_THROTTLE(2.0, "frame %lu has other intrinsics than the first frame: not fused",
                                static_cast<unsigned long>(msg->frame_index));
         return;
@@ -303,7 +298,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   fusion::DenseMapperConfig dense_config_;
   bool config_ok_ = false;
   std::unique_ptr<fusion::DenseMapper> dense_;  // made at the first frame (its intrinsics)
-  meshing::PinholeIntrinsics dense_K_;
+  meshing::PinholeImage dense_image_;
   std::size_t frames_integrated_ = 0;
   std::size_t published_markers_ = 0;
   unsigned segment_ = 0;  // the tracker's segment of the frames fused
