@@ -9,6 +9,8 @@
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "vitamin_e/io/dataset.h"
+
 namespace vitamin_e_ros {
 
 namespace enc = sensor_msgs::image_encodings;
@@ -16,6 +18,7 @@ using vitamin_e::camera::Camera;
 using vitamin_e::camera::CalibrationError;
 using vitamin_e::camera::DistortionModel;
 using vitamin_e::camera::Pinhole;
+using vitamin_e::io::ChannelOrder;
 
 bool isFinite(const Eigen::Isometry3d& T) {
   if (!T.matrix().allFinite()) return false;
@@ -99,32 +102,22 @@ bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error) {
   // keep the image beyond the message's lifetime).
   const cv::Mat view(static_cast<int>(msg.height), static_cast<int>(msg.width), cv_type,
                      const_cast<std::uint8_t*>(msg.data.data()), msg.step);
-  if (cv_type == CV_8UC1) {
-    view.copyTo(*gray);
-  } else if (cv_type == CV_16UC1) {
-    view.convertTo(*gray, CV_8U, 1.0 / 256.0);
-  } else if (e == enc::RGB8) {
-    cv::cvtColor(view, *gray, cv::COLOR_RGB2GRAY);
-  } else if (e == enc::BGR8) {
-    cv::cvtColor(view, *gray, cv::COLOR_BGR2GRAY);
-  } else if (e == enc::RGBA8) {
-    cv::cvtColor(view, *gray, cv::COLOR_RGBA2GRAY);
-  } else {
-    cv::cvtColor(view, *gray, cv::COLOR_BGRA2GRAY);
-  }
+  const bool rgb = e == enc::RGB8 || e == enc::RGBA8;
+  *gray = vitamin_e::io::toGray8(view, rgb ? ChannelOrder::kRgb : ChannelOrder::kBgr);
+  if (gray->data == view.data) *gray = gray->clone();  // mono8: toGray8 shares the pixels
   return true;
 }
 
 Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
   // Full-resolution intrinsics: P (rectified image, no distortion) or K and D (raw image).
-  double fx, fy, cx, cy;
+  Pinhole K;
   if (rectified) {
-    fx = info.P[0], fy = info.P[5], cx = info.P[2], cy = info.P[6];
-    if (!(fx > 0.0) || !(fy > 0.0)) {
+    K = {info.P[0], info.P[5], info.P[2], info.P[6]};
+    if (!(K.fx > 0.0) || !(K.fy > 0.0)) {
       throw CalibrationError("camera_info: rectified image but P has no focal length (P = 0: an uncalibrated camera?)");
     }
   } else {
-    fx = info.K[0], fy = info.K[4], cx = info.K[2], cy = info.K[5];
+    K = {info.K[0], info.K[4], info.K[2], info.K[5]};
   }
   // REP-104: the ROI is a window of the full-resolution image; binning then divides it.
   const double bx = info.binning_x > 1 ? info.binning_x : 1.0;
@@ -201,19 +194,10 @@ bool compressedToMono8(const sensor_msgs::CompressedImage& msg, cv::Mat* gray, s
     return false;
   }
   // OpenCV decodes colour as BGR(A) whatever the original encoding was.
-  if (decoded.depth() == CV_16U) decoded.convertTo(decoded, CV_8U, 1.0 / 256.0);
-  if (decoded.depth() != CV_8U) {
-    *error = "unsupported decoded image depth (format '" + msg.format + "')";
-    return false;
-  }
-  if (decoded.channels() == 1) {
-    *gray = decoded;
-  } else if (decoded.channels() == 3) {
-    cv::cvtColor(decoded, *gray, cv::COLOR_BGR2GRAY);
-  } else if (decoded.channels() == 4) {
-    cv::cvtColor(decoded, *gray, cv::COLOR_BGRA2GRAY);
-  } else {
-    *error = "unsupported channel count " + std::to_string(decoded.channels());
+  try {
+    *gray = vitamin_e::io::toGray8(decoded, ChannelOrder::kBgr);
+  } catch (const vitamin_e::io::DatasetError& e) {
+    *error = std::string("decoded image: ") + e.what() + " (format '" + msg.format + "')";
     return false;
   }
   return true;
