@@ -11,6 +11,7 @@
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include "save_file_service.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/ros/conversions.h"
@@ -542,40 +543,22 @@ bool TrackingNodelet::exportPoints(const std::string& path, std::string* message
 
 bool TrackingNodelet::saveTrajectoryService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string path = req.path.empty() ? trajectory_file_ : req.path;
-  if (path.empty()) {
-    res.success = false;
-    res.message = "no path given and ~trajectory_file not set";
-    return true;
-  }
-  res.success = saveTrajectory(path, &res.message);
-  NODELET_INFO("%s", res.message.c_str());
+  auto save = [this](const std::string& path, std::string* message) { return saveTrajectory(path, message); };
+  if (answerSaveFile(req, trajectory_file_, "trajectory_file", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 
 bool TrackingNodelet::saveMapService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string path = req.path.empty() ? save_map_ : req.path;
-  if (path.empty()) {
-    res.success = false;
-    res.message = "no path given and ~save_map not set";
-    return true;
-  }
-  res.success = saveMap(path, &res.message);
-  NODELET_INFO("%s", res.message.c_str());
+  auto save = [this](const std::string& path, std::string* message) { return saveMap(path, message); };
+  if (answerSaveFile(req, save_map_, "save_map", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 
 bool TrackingNodelet::exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string path = req.path.empty() ? export_points_ : req.path;
-  if (path.empty()) {
-    res.success = false;
-    res.message = "no path given and ~export_points not set";
-    return true;
-  }
-  res.success = exportPoints(path, &res.message);
-  NODELET_INFO("%s", res.message.c_str());
+  auto save = [this](const std::string& path, std::string* message) { return exportPoints(path, message); };
+  if (answerSaveFile(req, export_points_, "export_points", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 

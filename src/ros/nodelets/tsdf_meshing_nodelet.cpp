@@ -18,6 +18,7 @@
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include "save_file_service.h"
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TsdfMeshingConfig.h"
@@ -259,33 +260,26 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     return true;
   }
 
+  // Why a save is refused before a path is looked at ("": it is not).
+  std::string saveRefusal() const {
+    return !config_ok_ ? "no TSDF (bad configuration or dense.enabled false)" : !dense_ ? "no frame fused yet" : "";
+  }
+
   bool saveTsdfService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string path = req.path.empty() ? save_tsdf_ : req.path;
-    if (!dense_ || path.empty()) {
-      res.success = false;
-      res.message = !config_ok_ ? "no TSDF (bad parameters)"
-                    : !dense_   ? "no frame fused yet"
-                                : "no path given and ~save_tsdf not set";
-      return true;
+    auto save = [this](const std::string& path, std::string* message) { return saveTsdf(path, message); };
+    if (answerSaveFile(req, save_tsdf_, "save_tsdf", saveRefusal(), &res, save)) {
+      NODELET_INFO("%s", res.message.c_str());
     }
-    res.success = saveTsdf(path, &res.message);
-    NODELET_INFO("%s", res.message.c_str());
     return true;
   }
 
   bool saveMeshService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string path = req.path.empty() ? mesh_file_ : req.path;
-    if (!dense_ || path.empty()) {
-      res.success = false;
-      res.message = !config_ok_ ? "no TSDF (bad configuration or dense.enabled false)"
-                    : !dense_   ? "no frame fused yet"
-                                : "no path given and ~mesh_file not set";
-      return true;
+    auto save = [this](const std::string& path, std::string* message) { return saveMesh(path, message); };
+    if (answerSaveFile(req, mesh_file_, "mesh_file", saveRefusal(), &res, save)) {
+      NODELET_INFO("%s", res.message.c_str());
     }
-    res.success = saveMesh(path, &res.message);
-    NODELET_INFO("%s", res.message.c_str());
     return true;
   }
 
