@@ -430,9 +430,9 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   const double final_cost = solver.finish(&summary.residual_px);
   summary.final_cost = final_cost;
   if (options.compute_covariance) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = TimingClock::now();
     solver.covariance(&summary);
-    summary.covariance_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    summary.covariance_ms = elapsedMs(t0);
   }
   return summary;
 }
