@@ -36,8 +36,7 @@ const char* toString(DistortionModel model) {
 
 Camera::Camera(int width, int height, double fx, double fy, double cx, double cy, DistortionModel model,
                std::vector<double> distortion)
-    : width_(width), height_(height), pinhole_{fx, fy, cx, cy}, model_(model),
-      distortion_(std::move(distortion)) {
+    : width_(width), height_(height), pinhole_{fx, fy, cx, cy}, model_(model), distortion_(std::move(distortion)) {
   if (width <= 0 || height <= 0) {
     throw CalibrationError("camera: image size must be positive, got " + std::to_string(width) + "x" +
                            std::to_string(height));

@@ -14,8 +14,8 @@
 namespace vitamin_e_ros {
 
 namespace enc = sensor_msgs::image_encodings;
-using vitamin_e::camera::Camera;
 using vitamin_e::camera::CalibrationError;
+using vitamin_e::camera::Camera;
 using vitamin_e::camera::DistortionModel;
 using vitamin_e::camera::Pinhole;
 using vitamin_e::io::ChannelOrder;

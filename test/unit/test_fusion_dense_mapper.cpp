@@ -8,9 +8,7 @@
 using namespace vitamin_e;
 
 namespace {
-meshing::PinholeImage image() {
-  return {{400.0, 400.0, 320.0, 240.0}, 640, 480};
-}
+meshing::PinholeImage image() { return {{400.0, 400.0, 320.0, 240.0}, 640, 480}; }
 
 // Points on the plane z = 3 (world) seen by a camera at T_w_c looking along +z.
 void planePoints(const Eigen::Isometry3d& T_w_c, std::mt19937* rng, std::vector<std::uint64_t>* ids,

@@ -13,15 +13,13 @@
 #include "vitamin_e/meshing/frame_mesher.h"
 
 using namespace vitamin_e;
-using meshing::PinholeImage;
 using Eigen::Isometry3d;
 using Eigen::Vector3d;
+using meshing::PinholeImage;
 
 namespace {
 
-PinholeImage smallImage() {
-  return {{200.0, 200.0, 159.5, 119.5}, 320, 240};
-}
+PinholeImage smallImage() { return {{200.0, 200.0, 159.5, 119.5}, 320, 240}; }
 
 // Camera at `eye` looking at `target` (optical frame: z forward, y down-ish).
 Isometry3d lookAt(const Vector3d& eye, const Vector3d& target) {

@@ -22,9 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-meshing::PinholeImage smallImage() {
-  return {{200.0, 200.0, 159.5, 119.5}, 320, 240};
-}
+meshing::PinholeImage smallImage() { return {{200.0, 200.0, 159.5, 119.5}, 320, 240}; }
 
 // Camera at eye looking at the origin.
 Isometry3d lookAtOrigin(const Vector3d& eye) {

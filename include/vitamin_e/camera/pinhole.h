@@ -6,6 +6,7 @@
 // Coordinates (docs/DEVELOPING.md): "normalized" are undistorted (x/z, y/z) in the optical
 // camera frame (z forward); "pinhole pixels" are K * [x y 1].
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // homogeneous()
 
 namespace vitamin_e::camera {
 
@@ -33,7 +34,9 @@ struct Pinhole {
   }
   // K of the image binned by (bx, by): a binned pixel u covers pixels [bx u, bx u + bx), so
   // its centre is at bx u + (bx - 1) / 2 (pixel centres at integer coordinates).
-  Pinhole binned(double bx, double by) const { return {fx / bx, fy / by, (cx + 0.5) / bx - 0.5, (cy + 0.5) / by - 0.5}; }
+  Pinhole binned(double bx, double by) const {
+    return {fx / bx, fy / by, (cx + 0.5) / bx - 0.5, (cy + 0.5) / by - 0.5};
+  }
   Eigen::Matrix3d matrix() const {
     Eigen::Matrix3d k;
     k << fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0;
