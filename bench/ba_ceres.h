@@ -63,7 +63,7 @@ class Se3RightManifold : public ceres::Manifold {
 
 class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
  public:
-  ReprojectionCost(const geometry::Pinhole& K, const Eigen::Vector2d& uv) : K_(K), uv_(uv) {}
+  ReprojectionCost(const camera::Pinhole& K, const Eigen::Vector2d& uv) : K_(K), uv_(uv) {}
   bool Evaluate(double const* const* params, double* residuals, double** jacobians) const override {
     const Eigen::Isometry3d T_w_c = Se3RightManifold::fromParams(params[0]);
     const Eigen::Vector3d p_w(params[1][0], params[1][1], params[1][2]);
@@ -75,7 +75,7 @@ class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
       return true;
     }
     Eigen::Map<Eigen::Vector2d> res(residuals);
-    res = uv_ - K_.project(p_c);
+    res = uv_ - K_.projectPoint(p_c);
     if (jacobians) {
       geometry::Matrix26d Jc;
       geometry::Matrix23d Jp;
@@ -94,7 +94,7 @@ class ReprojectionCost : public ceres::SizedCostFunction<2, 7, 3> {
   }
 
  private:
-  geometry::Pinhole K_;
+  camera::Pinhole K_;
   Eigen::Vector2d uv_;
 };
 
@@ -126,11 +126,10 @@ inline double solveCeres(BaProblem& problem, double sigma, double tolerance, boo
   ceres::Problem cp(popt);
   GemanMcClureLoss loss(sigma);
   auto* manifold = new Se3RightManifold();
-  geometry::Pinhole K{problem.fx, problem.fy, problem.cx, problem.cy};
   std::vector<bool> cam_added(problem.cameras.size(), false);
   for (const BaObservation& o : problem.observations) {
     if (problem.cameras[o.camera].fixed && problem.points[o.point].fixed) continue;  // constant term
-    cp.AddResidualBlock(new ReprojectionCost(K, o.uv), &loss, &cams[7 * o.camera], &pts[3 * o.point]);
+    cp.AddResidualBlock(new ReprojectionCost(problem.K, o.uv), &loss, &cams[7 * o.camera], &pts[3 * o.point]);
     if (!cam_added[o.camera]) {
       cam_added[o.camera] = true;
       cp.SetManifold(&cams[7 * o.camera], manifold);

@@ -235,9 +235,8 @@ int main(int argc, char** argv) try {
   const Args args = parse(argc, argv);
   const Scene scene = dense_bench::loadScene(args.dir + "/scene.json");
   const eval::Trajectory gt = eval::readTum(args.dir + "/groundtruth_cam0_tum.txt");
-  meshing::PinholeIntrinsics K;
-  K.fx = scene.K(0, 0), K.fy = scene.K(1, 1), K.cx = scene.K(0, 2), K.cy = scene.K(1, 2);
-  K.width = scene.width, K.height = scene.height;
+  meshing::PinholeImage image{{scene.K(0, 0), scene.K(1, 1), scene.K(0, 2), scene.K(1, 2)}, scene.width, scene.height};
+  const camera::Pinhole& K = image.K;
 
   std::vector<FrameInput> frames;
   eval::Sim3 S;  // map -> ground-truth frame (identity for --gt-input)
@@ -255,7 +254,7 @@ int main(int argc, char** argv) try {
     config.validate();
     const auto dataset = io::openDataset(args.dir);
     const camera::Camera& camera = dataset->calibration().camera;
-    K = meshing::pinholeIntrinsicsOf(camera);
+    image = meshing::pinholeImageOf(camera);
     build_cfg = config.dense.mesher;
     prune_cfg = config.dense.prune;
     nltgv_cfg = config.dense.nltgv;
@@ -344,11 +343,11 @@ int main(int argc, char** argv) try {
       for (std::size_t i = 0; i < und.size(); ++i) {
         const Vector2d uv(und[i].x, und[i].y);
         const double z = dense_bench::rayCast(scene, o, in.T_w_c_true.linear() * K.ray(uv));
-        if (!std::isfinite(z) || !K.inImage(uv)) continue;
+        if (!std::isfinite(z) || !image.inImage(uv)) continue;
         double inv = (1.0 / z) * (1.0 + args.noise * N(rng));
         if (U(rng) < args.outliers) inv = (1.0 / z) * std::exp(1.4 * U(rng) - 0.7);
         in.ids.push_back(tracker.ids[i]);
-        in.p_c.push_back(K.backProject(uv, 1.0 / inv));
+        in.p_c.push_back(K.ray(uv) * (1.0 / inv));
       }
       frames.push_back(std::move(in));
     }
@@ -384,7 +383,7 @@ int main(int argc, char** argv) try {
     meshing::FrameMesh mesh;
     {
       ScopedTimer t(&timings, "delaunay_mesh");
-      mesh = mesher.buildFromPoints(in.ids, in.p_c, K);
+      mesh = mesher.buildFromPoints(in.ids, in.p_c, image);
     }
     const meshing::FrameMesh raw = mesh;
     if (denoise && !mesh.triangles.empty()) {
@@ -403,18 +402,18 @@ int main(int argc, char** argv) try {
     verts.push_back(static_cast<double>(mesh.vertices.size()));
     const auto t1 = TimingClock::now();
     const double c1b = threadCpuMs();
-    tsdf15.integrate(mesh, in.T_w_c, K);
+    tsdf15.integrate(mesh, in.T_w_c, image);
     tsdf15.updateMesh();
     t15_ms.push_back(elapsedMs(t1));
     const double c2 = threadCpuMs();
     t15_cpu.push_back(c2 - c1b);
     const auto t2 = TimingClock::now();
-    tsdf25.integrate(mesh, in.T_w_c, K);
+    tsdf25.integrate(mesh, in.T_w_c, image);
     const double int25 = elapsedMs(t2);
     tsdf25.updateMesh();
     t25_ms.push_back(elapsedMs(t2));
     t25_cpu.push_back(threadCpuMs() - c2);
-    if (tsdf_run) tsdf_run->integrate(mesh, in.T_w_c, K);
+    if (tsdf_run) tsdf_run->integrate(mesh, in.T_w_c, image);
     timings.add("tsdf15_integrate+mc", t15_ms.back());
     timings.add("tsdf2.5_integrate", int25);
     timings.add("tsdf2.5_mc", t25_ms.back() - int25);
@@ -430,11 +429,11 @@ int main(int argc, char** argv) try {
     };
     vertex_err(raw, &raw_err);
     vertex_err(mesh, &smooth_err);
-    const auto d_raw = fusion::TsdfVolume::rasterizeDepth(raw_pruned, K);
-    const auto d_smooth = fusion::TsdfVolume::rasterizeDepth(mesh, K);
-    for (int v = 0; v < K.height; v += 6)
-      for (int u = 0; u < K.width; u += 6) {
-        const std::size_t idx = static_cast<std::size_t>(v) * K.width + u;
+    const auto d_raw = fusion::TsdfVolume::rasterizeDepth(raw_pruned, image);
+    const auto d_smooth = fusion::TsdfVolume::rasterizeDepth(mesh, image);
+    for (int v = 0; v < image.height; v += 6)
+      for (int u = 0; u < image.width; u += 6) {
+        const std::size_t idx = static_cast<std::size_t>(v) * image.width + u;
         const double z = true_z(Vector2d(u, v));
         if (!std::isfinite(z)) continue;
         if (d_raw[idx] > 0 && d_smooth[idx] > 0) {  // pixels covered by both meshes

@@ -162,7 +162,7 @@ Row runIncremental(int window_points, const Args& a) {
   // Builds the window problem [first, last]; new points are triangulated from est_T.
   auto build = [&](int first, int last, BaProblem* prob, BaProblem* truth, std::vector<int>* pt_ids) {
     *prob = BaProblem();
-    prob->fx = obs_src.fx; prob->fy = obs_src.fy; prob->cx = obs_src.cx; prob->cy = obs_src.cy;
+    prob->K = obs_src.K;
     *truth = *prob;
     for (int c = first; c <= last; ++c) {
       prob->cameras.push_back({est_T[c], false});
@@ -182,10 +182,10 @@ Row runIncremental(int window_points, const Args& a) {
         for (int k : in) {
           const BaObservation& o = obs_src.observations[k];
           Ts.push_back(est_T[o.camera]);
-          xy.emplace_back((o.uv.x() - obs_src.cx) / obs_src.fx, (o.uv.y() - obs_src.cy) / obs_src.fy);
+          xy.push_back(obs_src.K.unproject(o.uv));
         }
         geometry::TriangulationConfig tc;
-        tc.focal_px = obs_src.fx;
+        tc.focal_px = obs_src.K.fx;
         tc.min_parallax_deg = 0.3;
         tc.max_reproj_error_px = 5.0;
         const geometry::TriangulationResult tr = geometry::triangulatePoint(Ts, xy, tc);

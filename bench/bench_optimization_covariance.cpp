@@ -4,12 +4,12 @@
 //   bench_optimization_covariance [--points N] [--runs R]
 // Prints the mean wall ms per solve for each and the covariance's own time
 // (BaSummary::covariance_ms); the last line is JSON.
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
 #include "cli.h"
+#include "vitamin_e/common/timing.h"
 #include "vitamin_e/optimization/ba_synthetic.h"
 #include "vitamin_e/optimization/subspace_gn.h"
 
@@ -45,9 +45,9 @@ int main(int argc, char** argv) {
       BaOptions o;
       o.max_sweeps = 3;
       o.compute_covariance = on != 0;
-      const auto t0 = std::chrono::steady_clock::now();
+      const auto t0 = vitamin_e::TimingClock::now();
       const BaSummary sum = solveSubspaceGaussNewton(p, o);
-      ms[on] += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      ms[on] += vitamin_e::elapsedMs(t0);
       if (on) cov_ms += sum.covariance_ms;
       observations = sum.active_observations;
     }

@@ -285,8 +285,8 @@ int run(const Options& o) {
   if (!o.pipelined) sequential = std::make_unique<pl::System>(config, calib.camera);
   std::unique_ptr<vitamin_e::fusion::DenseMapper> dense;
   if (config.dense_enabled) {
-    dense = std::make_unique<vitamin_e::fusion::DenseMapper>(
-        config.dense, vitamin_e::meshing::pinholeIntrinsicsOf(calib.camera));
+    dense = std::make_unique<vitamin_e::fusion::DenseMapper>(config.dense,
+                                                             vitamin_e::meshing::pinholeImageOf(calib.camera));
   }
   if ((!o.load_tsdf.empty() || !o.save_tsdf.empty()) && !dense) {
     fail("--load-tsdf / --save-tsdf need the dense reconstruction (dense_enabled is false in the config)");

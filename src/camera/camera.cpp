@@ -36,8 +36,7 @@ const char* toString(DistortionModel model) {
 
 Camera::Camera(int width, int height, double fx, double fy, double cx, double cy, DistortionModel model,
                std::vector<double> distortion)
-    : width_(width), height_(height), fx_(fx), fy_(fy), cx_(cx), cy_(cy), model_(model),
-      distortion_(std::move(distortion)) {
+    : width_(width), height_(height), pinhole_{fx, fy, cx, cy}, model_(model), distortion_(std::move(distortion)) {
   if (width <= 0 || height <= 0) {
     throw CalibrationError("camera: image size must be positive, got " + std::to_string(width) + "x" +
                            std::to_string(height));
@@ -60,15 +59,7 @@ Camera::Camera(int width, int height, double fx, double fy, double cx, double cy
   }
 }
 
-Eigen::Matrix3d Camera::K() const {
-  Eigen::Matrix3d k;
-  k << fx_, 0.0, cx_, 0.0, fy_, cy_, 0.0, 0.0, 1.0;
-  return k;
-}
-
-Eigen::Vector2d Camera::pinholePixel(const Eigen::Vector2d& xy) const {
-  return {fx_ * xy.x() + cx_, fy_ * xy.y() + cy_};
-}
+bool Pinhole::valid() const { return finite(fx) && finite(fy) && finite(cx) && finite(cy) && fx > 0.0 && fy > 0.0; }
 
 Eigen::Vector2d Camera::distortNormalized(const Eigen::Vector2d& xy, Eigen::Matrix2d* d_uv_d_xy) const {
   const double x = xy.x(), y = xy.y();
@@ -121,10 +112,10 @@ Eigen::Vector2d Camera::distortNormalized(const Eigen::Vector2d& xy, Eigen::Matr
     }
   }
   if (d_uv_d_xy) {
-    d_uv_d_xy->row(0) = fx_ * J.row(0);
-    d_uv_d_xy->row(1) = fy_ * J.row(1);
+    d_uv_d_xy->row(0) = pinhole_.fx * J.row(0);
+    d_uv_d_xy->row(1) = pinhole_.fy * J.row(1);
   }
-  return pinholePixel(xy_d);
+  return pinhole_.project(xy_d);
 }
 
 bool Camera::project(const Eigen::Vector3d& p_c, Eigen::Vector2d* uv, Eigen::Matrix<double, 2, 3>* d_uv_d_p_c) const {
@@ -168,7 +159,7 @@ bool solveTheta(const std::vector<double>& k, double theta_d, double* theta) {
 
 bool Camera::unprojectNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* xy_out) const {
   if (!uv.allFinite()) return false;
-  const Eigen::Vector2d xy_d((uv.x() - cx_) / fx_, (uv.y() - cy_) / fy_);
+  const Eigen::Vector2d xy_d = pinhole_.unproject(uv);
   if (model_ == DistortionModel::kNone) {
     *xy_out = xy_d;
     return true;
@@ -233,9 +224,8 @@ void Camera::undistortionMaps(cv::Mat* map_x, cv::Mat* map_y) const {
   for (int v = 0; v < height_; ++v) {
     float* mx = map_x->ptr<float>(v);
     float* my = map_y->ptr<float>(v);
-    const double y = (v - cy_) / fy_;
     for (int u = 0; u < width_; ++u) {
-      const Eigen::Vector2d d = distortNormalized(Eigen::Vector2d((u - cx_) / fx_, y));
+      const Eigen::Vector2d d = distortNormalized(pinhole_.unproject(Eigen::Vector2d(u, v)));
       mx[u] = static_cast<float>(d.x());
       my[u] = static_cast<float>(d.y());
     }
@@ -245,7 +235,7 @@ void Camera::undistortionMaps(cv::Mat* map_x, cv::Mat* map_y) const {
 std::string Camera::describe() const {
   std::ostringstream os;
   os.precision(10);
-  os << width_ << "x" << height_ << " fx=" << fx_ << " fy=" << fy_ << " cx=" << cx_ << " cy=" << cy_ << " "
+  os << width_ << "x" << height_ << " fx=" << fx() << " fy=" << fy() << " cx=" << cx() << " cy=" << cy() << " "
      << toString(model_);
   if (!distortion_.empty()) {
     os << " [";

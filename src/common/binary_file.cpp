@@ -89,7 +89,8 @@ bool writeBinaryFile(const std::string& path, const std::string& header_line, co
   return true;
 }
 
-BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind) {
+BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind,
+                                  int version) {
   const std::string what = kind + " file '" + path + "'";
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) throw BinaryFileError(what + ": " + std::strerror(errno));
@@ -109,6 +110,14 @@ BinaryFileContents readBinaryFile(const std::string& path, const std::string& ma
   if (!nl) throw BinaryFileError(what + ": truncated or damaged header line");
   BinaryFileContents out;
   out.header_line = data.substr(0, eol);
+  int found = 0;
+  if (std::sscanf(out.header_line.c_str() + magic.size(), "%d,", &found) != 1) {
+    throw BinaryFileError(what + ": damaged header line '" + out.header_line + "'");
+  }
+  if (found != version) {
+    throw BinaryFileError(what + ": format v" + std::to_string(found) + " is not supported (this build reads v" +
+                          std::to_string(version) + ")");
+  }
   const std::size_t head = eol + 1 + 2 * sizeof(std::uint64_t);
   if (data.size() < head) throw BinaryFileError(what + ": truncated after the header line");
   std::uint64_t size = 0, sum = 0;

@@ -21,10 +21,10 @@ void DenseMapperConfig::validate() const {
   if (min_points < 3) throw std::invalid_argument("dense.min_points must be >= 3");
 }
 
-DenseMapper::DenseMapper(const DenseMapperConfig& config, const meshing::PinholeIntrinsics& K)
-    : config_(config), K_(K), mesher_(config.mesher), pruner_(config.prune), denoiser_(config.nltgv) {
+DenseMapper::DenseMapper(const DenseMapperConfig& config, const meshing::PinholeImage& image)
+    : config_(config), image_(image), mesher_(config.mesher), pruner_(config.prune), denoiser_(config.nltgv) {
   config_.validate();
-  K_.validate();
+  image_.validate();
   integrator_ = std::make_unique<TsdfIntegrator>(config_.integrator);
 }
 
@@ -34,20 +34,20 @@ DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, con
   if (ids.size() != p_c.size()) throw std::invalid_argument("DenseMapper::addFrame: ids and points differ in size");
   if (static_cast<int>(p_c.size()) < config_.min_points || !T_w_c.matrix().allFinite()) return stats;
   auto t0 = TimingClock::now();
-  meshing::FrameMesh mesh = mesher_.buildFromPoints(ids, p_c, K_);
+  meshing::FrameMesh mesh = mesher_.buildFromPoints(ids, p_c, image_);
   stats.mesh_ms = elapsedMs(t0);
   if (!config_.denoise) {
-    pruner_.prune(&mesh, K_);
+    pruner_.prune(&mesh, image_.K);
   } else if (!mesh.triangles.empty()) {
     t0 = TimingClock::now();
-    denoiser_.denoise(&mesh, K_);
-    pruner_.prune(&mesh, K_);  // smoothing can open new depth jumps or flip triangles
+    denoiser_.denoise(&mesh, image_.K);
+    pruner_.prune(&mesh, image_.K);  // smoothing can open new depth jumps or flip triangles
     stats.denoise_ms = elapsedMs(t0);
   }
   stats.vertices = mesh.vertices.size();
   stats.triangles = mesh.triangles.size();
   if (mesh.triangles.empty()) return stats;
-  integrator_->submit(std::move(mesh), T_w_c, K_);
+  integrator_->submit(std::move(mesh), T_w_c, image_);
   stats.integrated = true;
   return stats;
 }

@@ -54,15 +54,7 @@ void TsdfVolume::load(const std::string& path) {
   const TsdfConfig& c = impl_->config;
   std::unordered_map<std::uint64_t, std::unique_ptr<Block>> blocks;
   try {
-    const BinaryFileContents file = readBinaryFile(path, kMagic, "TSDF");
-    int version = 0;
-    if (std::sscanf(file.header_line.c_str(), "vitamin_e tsdf v%d,", &version) != 1) {
-      throw TsdfFileError(what + ": damaged header line '" + file.header_line + "'");
-    }
-    if (version != kVersion) {
-      throw TsdfFileError(what + ": format v" + std::to_string(version) + " is not supported (this build reads v" +
-                          std::to_string(kVersion) + ")");
-    }
+    const BinaryFileContents file = readBinaryFile(path, kMagic, "TSDF", kVersion);
     BinaryReader r(file.payload.data(), file.payload.size(), what);
     if (r.get<std::uint32_t>() != kByteOrderMark) r.fail("written with another byte order or damaged");
     const double voxel = r.getFinite("voxel size");

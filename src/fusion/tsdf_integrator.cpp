@@ -29,7 +29,7 @@ void TsdfIntegrator::integrateJob(const Job& job) {
   const auto t0 = TimingClock::now();
   {
     std::lock_guard<std::mutex> lock(volume_mutex_);
-    volume_.integrate(job.mesh, job.T_w_c, job.K);
+    volume_.integrate(job.mesh, job.T_w_c, job.image);
   }
   const double ms = elapsedMs(t0);
   std::lock_guard<std::mutex> lock(queue_mutex_);
@@ -38,8 +38,8 @@ void TsdfIntegrator::integrateJob(const Job& job) {
 }
 
 void TsdfIntegrator::submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c,
-                            const meshing::PinholeIntrinsics& K) {
-  Job job{std::move(mesh), T_w_c, K};
+                            const meshing::PinholeImage& image) {
+  Job job{std::move(mesh), T_w_c, image};
   if (!config_.asynchronous) {
     {
       std::lock_guard<std::mutex> lock(queue_mutex_);

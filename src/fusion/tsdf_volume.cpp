@@ -14,17 +14,10 @@ void require(bool ok, const char* key, const std::string& what) {
   if (!ok) throw std::invalid_argument(std::string("tsdf.") + key + ": " + what);
 }
 
-// Intrinsics of a depth map downscaled by s (pixel centres at integer coordinates).
-meshing::PinholeIntrinsics scaled(const meshing::PinholeIntrinsics& K, int s) {
-  if (s == 1) return K;
-  meshing::PinholeIntrinsics k = K;
-  k.fx = K.fx / s;
-  k.fy = K.fy / s;
-  k.cx = (K.cx + 0.5) / s - 0.5;
-  k.cy = (K.cy + 0.5) / s - 0.5;
-  k.width = (K.width + s - 1) / s;
-  k.height = (K.height + s - 1) / s;
-  return k;
+// The image of a depth map downscaled by s (pixel centres at integer coordinates).
+meshing::PinholeImage scaled(const meshing::PinholeImage& image, int s) {
+  if (s == 1) return image;
+  return {image.K.binned(s, s), (image.width + s - 1) / s, (image.height + s - 1) / s};
 }
 
 // Z-buffered rasterisation of the mesh into an inverse-depth image of size (w, h);
@@ -91,29 +84,30 @@ std::size_t TsdfVolume::numBlocks() const { return impl_->blocks.size(); }
 std::size_t TsdfVolume::lastRemeshedBlocks() const { return impl_->last_remeshed; }
 void TsdfVolume::clear() { impl_->blocks.clear(); }
 
-std::vector<float> TsdfVolume::rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeIntrinsics& K) {
-  std::vector<float> d = rasterize(mesh, 1.0, 0.0, K.width, K.height);
+std::vector<float> TsdfVolume::rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeImage& image) {
+  std::vector<float> d = rasterize(mesh, 1.0, 0.0, image.width, image.height);
   for (float& v : d) v = v > 0.0f ? 1.0f / v : 0.0f;
   return d;
 }
 
 IntegrationStats TsdfVolume::integrate(const meshing::FrameMesh& mesh, const Eigen::Isometry3d& T_w_c,
-                                       const meshing::PinholeIntrinsics& K) {
+                                       const meshing::PinholeImage& image) {
   const int s = impl_->config.raster_downscale;
-  const meshing::PinholeIntrinsics k = scaled(K, s);
-  std::vector<float> d = rasterize(mesh, 1.0 / s, 0.5, k.width, k.height);
+  const meshing::PinholeImage small = scaled(image, s);
+  std::vector<float> d = rasterize(mesh, 1.0 / s, 0.5, small.width, small.height);
   for (float& v : d) v = v > 0.0f ? 1.0f / v : 0.0f;
-  return integrateDepth(d, T_w_c, k);
+  return integrateDepth(d, T_w_c, small);
 }
 
 IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth, const Eigen::Isometry3d& T_w_c,
-                                            const meshing::PinholeIntrinsics& K) {
-  K.validate();
-  if (depth.size() != static_cast<std::size_t>(K.width) * K.height)
+                                            const meshing::PinholeImage& image) {
+  image.validate();
+  if (depth.size() != static_cast<std::size_t>(image.width) * image.height)
     throw std::invalid_argument("TsdfVolume::integrateDepth: depth size != width * height");
   const TsdfConfig& cfg = impl_->config;
   IntegrationStats stats;
-  const int W = K.width, H = K.height, n = cfg.block_voxels;
+  const camera::Pinhole& K = image.K;
+  const int W = image.width, H = image.height, n = cfg.block_voxels;
   const double vs = cfg.voxel_size, bs = impl_->blockSize(), trunc = cfg.truncation;
 
   // 1. Blocks within the truncation band of some measured pixel.
@@ -170,8 +164,9 @@ IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth, con
         for (int ix = 0; ix < n; ++ix, p += dx, ++vox) {
           if (p.z() < cfg.min_depth) continue;
           const double inv_z = 1.0 / p.z();
-          const int u = static_cast<int>(std::lround(K.fx * p.x() * inv_z + K.cx));
-          const int v = static_cast<int>(std::lround(K.fy * p.y() * inv_z + K.cy));
+          const Eigen::Vector2d uv = K.projectPoint(p);
+          const int u = static_cast<int>(std::lround(uv.x()));
+          const int v = static_cast<int>(std::lround(uv.y()));
           if (u < 0 || v < 0 || u >= W || v >= H) continue;
           const float zm = depth[static_cast<std::size_t>(v) * W + u];
           if (!(zm >= cfg.min_depth && zm <= cfg.max_depth)) continue;

@@ -53,8 +53,7 @@ double refinePoseGemanMcClure(const std::vector<Eigen::Vector3d>& p_w, const std
                               const std::vector<bool>& mask, double focal_px, double sigma_px, int iterations,
                               Eigen::Isometry3d* T_w_c) {
   const GemanMcClure kernel(sigma_px);
-  Pinhole K;
-  K.fx = K.fy = focal_px;
+  const camera::Pinhole K{focal_px, focal_px, 0.0, 0.0};  // residuals in pixels: focal_px * normalized
   auto cost_of = [&](const Eigen::Isometry3d& T) {
     const Eigen::Isometry3d T_c_w = T.inverse();
     double c = 0.0;
@@ -65,7 +64,7 @@ double refinePoseGemanMcClure(const std::vector<Eigen::Vector3d>& p_w, const std
         c += kernel.sigma2;  // behind the camera: saturated
         continue;
       }
-      c += kernel.rho((focal_px * xy[i] - K.project(pc)).squaredNorm());
+      c += kernel.rho((focal_px * xy[i] - K.projectPoint(pc)).squaredNorm());
     }
     return c;
   };
@@ -79,7 +78,7 @@ double refinePoseGemanMcClure(const std::vector<Eigen::Vector3d>& p_w, const std
       if (!mask.empty() && !mask[i]) continue;
       const Eigen::Vector3d pc = T_c_w * p_w[i];
       if (pc.z() <= 1e-9) continue;
-      const Eigen::Vector2d r = focal_px * xy[i] - K.project(pc);
+      const Eigen::Vector2d r = focal_px * xy[i] - K.projectPoint(pc);
       const double w = kernel.weight(r.squaredNorm());
       Matrix26d J;
       reprojectionJacobians(K, pc, T_w_c->linear(), &J, nullptr);

@@ -25,7 +25,7 @@ std::string nanosecondsToSecondsText(const std::string& ns) {
   return sec + "." + digits.substr(digits.size() - 9);
 }
 
-cv::Mat toGray8(const cv::Mat& image) {
+cv::Mat toGray8(const cv::Mat& image, ChannelOrder order) {
   if (image.empty()) return image;
   cv::Mat img = image;
   if (img.depth() == CV_16U) {
@@ -33,11 +33,12 @@ cv::Mat toGray8(const cv::Mat& image) {
   } else if (img.depth() != CV_8U) {
     throw DatasetError("unsupported image depth (8 or 16 bit expected)");
   }
+  const bool rgb = order == ChannelOrder::kRgb;
   cv::Mat gray;
   switch (img.channels()) {
     case 1: gray = img; break;
-    case 3: cv::cvtColor(img, gray, cv::COLOR_BGR2GRAY); break;
-    case 4: cv::cvtColor(img, gray, cv::COLOR_BGRA2GRAY); break;
+    case 3: cv::cvtColor(img, gray, rgb ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY); break;
+    case 4: cv::cvtColor(img, gray, rgb ? cv::COLOR_RGBA2GRAY : cv::COLOR_BGRA2GRAY); break;
     default: throw DatasetError("unsupported number of image channels: " + std::to_string(img.channels()));
   }
   return gray;

@@ -268,15 +268,7 @@ bool saveMapFile(const MapFileContents& contents, const std::string& path, std::
 MapFileContents loadMapFile(const std::string& path) {
   const std::string what = "map file '" + path + "'";
   try {
-    const BinaryFileContents file = readBinaryFile(path, kMagic, "map");
-    int version = 0;
-    if (std::sscanf(file.header_line.c_str(), "vitamin_e map v%d,", &version) != 1) {
-      throw MapFileError(what + ": damaged header line '" + file.header_line + "'");
-    }
-    if (version != kMapFileVersion) {
-      throw MapFileError(what + ": format v" + std::to_string(version) + " is not supported (this build reads v" +
-                         std::to_string(kMapFileVersion) + ")");
-    }
+    const BinaryFileContents file = readBinaryFile(path, kMagic, "map", kMapFileVersion);
     MapFileContents c = parsePayload(file.payload, what);
     const std::string expected = mapFileHeader(c);
     if (file.header_line != expected) {

@@ -15,11 +15,11 @@ void require(bool ok, const char* key, const std::string& what) {
 }
 }  // namespace
 
-void PinholeIntrinsics::validate() const {
-  require(std::isfinite(fx) && fx > 0.0, "fx", "must be > 0");
-  require(std::isfinite(fy) && fy > 0.0, "fy", "must be > 0");
-  require(std::isfinite(cx), "cx", "must be finite");
-  require(std::isfinite(cy), "cy", "must be finite");
+void PinholeImage::validate() const {
+  require(std::isfinite(K.fx) && K.fx > 0.0, "fx", "must be > 0");
+  require(std::isfinite(K.fy) && K.fy > 0.0, "fy", "must be > 0");
+  require(std::isfinite(K.cx), "cx", "must be finite");
+  require(std::isfinite(K.cy), "cy", "must be finite");
   require(width > 0, "width", "must be > 0");
   require(height > 0, "height", "must be > 0");
 }
@@ -48,7 +48,7 @@ void FrameMesherConfig::validate() const {
 FrameMesher::FrameMesher(const FrameMesherConfig& config) : config_(config) { config_.validate(); }
 
 FrameMesh FrameMesher::build(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector2d>& uv,
-                             const std::vector<double>& depth, const PinholeIntrinsics& K) const {
+                             const std::vector<double>& depth, const PinholeImage& image) const {
   if (ids.size() != uv.size() || uv.size() != depth.size())
     throw std::invalid_argument("FrameMesher::build: ids, uv and depth must have the same size");
   FrameMesh mesh;
@@ -58,7 +58,7 @@ FrameMesh FrameMesher::build(const std::vector<std::uint64_t>& ids, const std::v
   for (std::size_t i = 0; i < ids.size(); ++i) {
     const double z = depth[i];
     if (!std::isfinite(z) || z < config_.min_depth || z > config_.max_depth) continue;
-    if (!std::isfinite(uv[i].x()) || !std::isfinite(uv[i].y()) || !K.inImage(uv[i])) continue;
+    if (!std::isfinite(uv[i].x()) || !std::isfinite(uv[i].y()) || !image.inImage(uv[i])) continue;
     MeshVertex v;
     v.id = ids[i];
     v.uv = uv[i];
@@ -67,22 +67,22 @@ FrameMesh FrameMesher::build(const std::vector<std::uint64_t>& ids, const std::v
     pts.push_back(uv[i]);
   }
   mesh.triangles = delaunayTriangulate(pts);
-  prune(&mesh, K);
+  prune(&mesh, image.K);
   return mesh;
 }
 
 FrameMesh FrameMesher::buildFromPoints(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
-                                       const PinholeIntrinsics& K) const {
+                                       const PinholeImage& image) const {
   std::vector<Eigen::Vector2d> uv(p_c.size());
   std::vector<double> depth(p_c.size());
   for (std::size_t i = 0; i < p_c.size(); ++i) {
     depth[i] = p_c[i].z();
-    uv[i] = p_c[i].z() > 0.0 ? K.project(p_c[i]) : Eigen::Vector2d(-1.0, -1.0);
+    uv[i] = p_c[i].z() > 0.0 ? image.K.projectPoint(p_c[i]) : Eigen::Vector2d(-1.0, -1.0);
   }
-  return build(ids, uv, depth, K);
+  return build(ids, uv, depth, image);
 }
 
-void FrameMesher::prune(FrameMesh* mesh, const PinholeIntrinsics& K) const {
+void FrameMesher::prune(FrameMesh* mesh, const camera::Pinhole& K) const {
   const double max_edge2 = config_.max_edge_px * config_.max_edge_px;
   const double min_cos = std::cos(config_.max_normal_angle_deg * M_PI / 180.0);
   auto& V = mesh->vertices;
@@ -103,9 +103,9 @@ void FrameMesher::prune(FrameMesh* mesh, const PinholeIntrinsics& K) const {
       const double mhi = std::max({a.measured_inv_depth, b.measured_inv_depth, c.measured_inv_depth});
       if ((mhi - mlo) > config_.max_inv_depth_jump * mhi) continue;
     }
-    const Eigen::Vector3d pa = K.backProject(a.uv, 1.0 / a.inv_depth);
-    const Eigen::Vector3d pb = K.backProject(b.uv, 1.0 / b.inv_depth);
-    const Eigen::Vector3d pc = K.backProject(c.uv, 1.0 / c.inv_depth);
+    const Eigen::Vector3d pa = K.ray(a.uv) * (1.0 / a.inv_depth);
+    const Eigen::Vector3d pb = K.ray(b.uv) * (1.0 / b.inv_depth);
+    const Eigen::Vector3d pc = K.ray(c.uv) * (1.0 / c.inv_depth);
     const Eigen::Vector3d n = (pb - pa).cross(pc - pa);
     const Eigen::Vector3d ray = (pa + pb + pc) / 3.0;
     const double nn = n.norm() * ray.norm();

@@ -38,7 +38,7 @@ void NltgvDenoiser::reset() {
   prev_duals_.clear();
 }
 
-NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
+NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
   NltgvStats stats;
   auto& V = mesh->vertices;
   const int n = static_cast<int>(V.size());
@@ -69,8 +69,9 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const PinholeIntrinsics& K) {
   for (int i = 0; i < n; ++i) {
     z[i] = V[i].measured_inv_depth / unit;
     xi[i] = z[i];
-    nx[i] = (V[i].uv.x() - K.cx) / K.fx;
-    ny[i] = (V[i].uv.y() - K.cy) / K.fy;
+    const Eigen::Vector2d xy = K.unproject(V[i].uv);
+    nx[i] = xy.x();
+    ny[i] = xy.y();
     if (config_.warm_start) {
       const auto it = prev_vertices_.find(V[i].id);
       if (it != prev_vertices_.end() && !config_.warm_start_primal) {

@@ -14,7 +14,7 @@ constexpr double kMinDepth = 1e-9;
 }
 
 void BaProblem::validate() const {
-  if (!(fx > 0.0) || !(fy > 0.0)) throw std::invalid_argument("BaProblem: fx and fy must be > 0");
+  if (!(K.fx > 0.0) || !(K.fy > 0.0)) throw std::invalid_argument("BaProblem: fx and fy must be > 0");
   const int nc = static_cast<int>(cameras.size());
   const int np = static_cast<int>(points.size());
   for (size_t k = 0; k < observations.size(); ++k) {
@@ -31,8 +31,7 @@ bool baResidual(const BaProblem& problem, const BaObservation& obs, Eigen::Vecto
     r->setConstant(1e6);
     return false;
   }
-  const double iz = 1.0 / p_c.z();
-  *r = obs.uv - Eigen::Vector2d(problem.fx * p_c.x() * iz + problem.cx, problem.fy * p_c.y() * iz + problem.cy);
+  *r = obs.uv - problem.K.projectPoint(p_c);
   return true;
 }
 

@@ -13,7 +13,7 @@ namespace optimization {
 void SyntheticBaConfig::validate() const {
   if (num_cameras < 2) throw std::invalid_argument("num_cameras must be >= 2");
   if (num_points < 1) throw std::invalid_argument("num_points must be >= 1");
-  if (!(fx > 0.0 && fy > 0.0)) throw std::invalid_argument("fx/fy must be > 0");
+  if (!(K.fx > 0.0 && K.fy > 0.0)) throw std::invalid_argument("fx/fy must be > 0");
   if (width < 16 || height < 16) throw std::invalid_argument("width/height must be >= 16");
   if (!(min_depth > 0.0 && max_depth >= min_depth)) throw std::invalid_argument("min_depth/max_depth invalid");
   if (min_track < 2 || max_track < min_track) throw std::invalid_argument("min_track/max_track invalid");
@@ -29,10 +29,7 @@ SyntheticBa makeSyntheticBa(const SyntheticBaConfig& cfg) {
   std::normal_distribution<double> gauss(0.0, 1.0);
   SyntheticBa out;
   BaProblem& P = out.truth;
-  P.fx = cfg.fx;
-  P.fy = cfg.fy;
-  P.cx = cfg.cx;
-  P.cy = cfg.cy;
+  P.K = cfg.K;
   const int N = cfg.num_cameras;
   P.cameras.resize(N);
   for (int k = 0; k < N; ++k) {
@@ -54,13 +51,13 @@ SyntheticBa makeSyntheticBa(const SyntheticBaConfig& cfg) {
       const double u = cfg.width * (margin + (1 - 2 * margin) * uni(rng));
       const double v = cfg.height * (margin + (1 - 2 * margin) * uni(rng));
       const double z = cfg.min_depth + (cfg.max_depth - cfg.min_depth) * uni(rng);
-      const Eigen::Vector3d p_c((u - cfg.cx) / cfg.fx * z, (v - cfg.cy) / cfg.fy * z, z);
+      const Eigen::Vector3d p_c = cfg.K.ray(Eigen::Vector2d(u, v)) * z;
       const Eigen::Vector3d p_w = P.cameras[ref].T_w_c * p_c;
       std::vector<BaObservation> obs;
       for (int k = first; k <= last; ++k) {
         const Eigen::Vector3d q = P.cameras[k].T_w_c.inverse() * p_w;
         if (q.z() < 0.1) continue;
-        const Eigen::Vector2d uv(cfg.fx * q.x() / q.z() + cfg.cx, cfg.fy * q.y() / q.z() + cfg.cy);
+        const Eigen::Vector2d uv = cfg.K.projectPoint(q);
         if (uv.x() < 0 || uv.y() < 0 || uv.x() >= cfg.width || uv.y() >= cfg.height) continue;
         obs.push_back({k, static_cast<int>(P.points.size()), uv});
       }

@@ -135,11 +135,7 @@ inline void addRank2(Matrix6d* S, const Matrix26d& Jl, const Eigen::Matrix2d& M,
 
 }  // namespace
 
-SubspaceGn::SubspaceGn(BaProblem& p, const BaOptions& o) : P_(p), O_(o), kernel_(o.robust_sigma_px) {
-  K_.fx = p.fx;
-  K_.fy = p.fy;
-  K_.cx = p.cx;
-  K_.cy = p.cy;
+SubspaceGn::SubspaceGn(BaProblem& p, const BaOptions& o) : P_(p), O_(o), kernel_(o.robust_sigma_px), K_(p.K) {
   buildStructure();
   const int npf = freePoints();
   T_ = std::max(1, std::min(O_.threads, npf / 256));
@@ -434,9 +430,9 @@ BaSummary solveSubspaceGaussNewton(BaProblem& problem, const BaOptions& options)
   const double final_cost = solver.finish(&summary.residual_px);
   summary.final_cost = final_cost;
   if (options.compute_covariance) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = TimingClock::now();
     solver.covariance(&summary);
-    summary.covariance_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    summary.covariance_ms = elapsedMs(t0);
   }
   return summary;
 }

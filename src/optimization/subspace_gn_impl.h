@@ -144,7 +144,7 @@ class SubspaceGn {
   // and by the camera-pair terms of the Schur complement (k(k+1)/2 for k slots).
   std::vector<int> split_obs_, split_schur_;
   geometry::GemanMcClure kernel_;
-  geometry::Pinhole K_;
+  camera::Pinhole K_;
   std::vector<int> cam_var_, pt_var_, cams_, pts_;
   std::vector<int> pt_begin_, pt_obs_, obs_slot_, cam_only_obs_;
   // Point-major copies of the active observations (pt_obs_ order): camera index and pixel, so

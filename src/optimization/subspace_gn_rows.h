@@ -32,8 +32,8 @@ struct ObsEval {
   double jp0[3], jp1[3];
 
   // Returns false when the point is at depth <= min_depth (no residual).
-  inline bool residual(const geometry::Pinhole& K, double sigma2, const Eigen::Matrix3d& R,
-                       const Eigen::Vector3d& t, const Eigen::Vector3d& p, const Eigen::Vector2d& uv) {
+  inline bool residual(const camera::Pinhole& K, double sigma2, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                       const Eigen::Vector3d& p, const Eigen::Vector2d& uv) {
     const double* m = R.data();
     const double d0 = p.x() - t.x(), d1 = p.y() - t.y(), d2 = p.z() - t.z();
     x = m[0] * d0 + m[1] * d1 + m[2] * d2;

@@ -98,14 +98,12 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
   const camera::Camera& camera = camera_;
   if (!(radius > 0.0) || tracks.empty()) return 0;
   const Eigen::Isometry3d T_c_w = T_w_c.inverse();
-  auto pinhole = [&](const Eigen::Vector2d& xy) {
-    return Eigen::Vector2d(camera.fx() * xy.x() + camera.cx(), camera.fy() * xy.y() + camera.cy());
-  };
+  const camera::Pinhole& K = camera.pinhole();
   TrackGrid grid(camera.width(), camera.height(), std::max(radius, 1.0));
   DepthGrid depth(camera.width(), camera.height(), 24);
   std::vector<Eigen::Vector2d> track_px(tracks.size());
   for (std::size_t i = 0; i < tracks.size(); ++i) {
-    track_px[i] = pinhole(tracks[i].xy);
+    track_px[i] = K.project(tracks[i].xy);
     if (const map::Landmark* l = landmarks[i]) {
       const double z = (T_c_w * l->p_w).z();
       if (z > 0.0) depth.add(track_px[i], z);
@@ -118,7 +116,7 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
   auto consider = [&](const Eigen::Vector3d& p_w, std::int8_t polarity, const Claim& what) {
     const Eigen::Vector3d p_c = T_c_w * p_w;
     if (p_c.z() <= min_depth) return;
-    const Eigen::Vector2d px = pinhole(p_c.hnormalized());
+    const Eigen::Vector2d px = K.project(p_c.hnormalized());
     if (px.x() < 0 || px.y() < 0 || px.x() >= camera.width() || px.y() >= camera.height()) return;
     if (p_c.z() > occlusion_ratio_ * depth.at(px)) return;
     int nearest = -1;

@@ -39,10 +39,7 @@ std::vector<std::uint64_t> Mapper::penalize(const std::vector<std::uint64_t>& id
 FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const {
   const bool keyframe_window = frame == nullptr;
   optimization::BaProblem problem;
-  problem.fx = camera_.fx();
-  problem.fy = camera_.fy();
-  problem.cx = camera_.cx();
-  problem.cy = camera_.cy();
+  problem.K = camera_.pinhole();
   const auto& kfs = map->keyframes();
   // Cameras: the window's keyframes; in per-frame mode the current frame is
   // appended as the only free camera.
@@ -73,9 +70,6 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
     }
     return -1;
   };
-  auto to_px = [&](const Eigen::Vector2d& xy) {
-    return Eigen::Vector2d(camera_.fx() * xy.x() + camera_.cx(), camera_.fy() * xy.y() + camera_.cy());
-  };
   // Points: per frame, those the current frame sees; per keyframe, those the
   // free keyframes see. Each comes with all its keyframe observations.
   std::vector<const map::Landmark*> points;
@@ -89,7 +83,7 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
     for (const map::LandmarkObservation& o : l->observations) {
       const int cam = camera_of(o.keyframe);
       if (cam >= 0) {
-        problem.observations.push_back({cam, idx, to_px(o.xy)});
+        problem.observations.push_back({cam, idx, problem.K.project(o.xy)});
         ++seen;
       }
     }
@@ -110,7 +104,7 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
       const map::Landmark* l = frame->landmarks[i];
       if (!l) continue;
       const int p = add_point(l, 1);
-      problem.observations.push_back({current_cam, p, to_px(frame->tracks[i].xy)});
+      problem.observations.push_back({current_cam, p, problem.K.project(frame->tracks[i].xy)});
     }
   }
   FrameRefinement out;

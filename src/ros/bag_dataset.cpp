@@ -6,12 +6,11 @@
 #include <set>
 #include <vector>
 
-#include <cv_bridge/cv_bridge.h>
-#include <opencv2/imgproc.hpp>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/Image.h>
-#include <sensor_msgs/image_encodings.h>
+
+#include "vitamin_e/ros/conversions.h"
 
 namespace vitamin_e_ros {
 
@@ -30,32 +29,11 @@ std::string stampText(const ros::Time& t) {
   return buf;
 }
 
-// Image message -> CV_8UC1, by encoding.
+// Image message -> CV_8UC1: the ROS layer's one conversion (toMono8), errors as DatasetError.
 cv::Mat toGray(const sensor_msgs::Image& msg, const std::string& what) {
-  namespace enc = sensor_msgs::image_encodings;
-  cv_bridge::CvImageConstPtr cv;
-  try {
-    cv = cv_bridge::toCvCopy(msg);
-  } catch (const std::exception& e) {
-    throw DatasetError(what + ": cannot decode the image (" + e.what() + ")");
-  }
-  const std::string& e = msg.encoding;
   cv::Mat gray;
-  if (e == enc::MONO8 || e == enc::TYPE_8UC1) {
-    gray = cv->image;
-  } else if (e == enc::MONO16 || e == enc::TYPE_16UC1) {
-    cv->image.convertTo(gray, CV_8U, 1.0 / 256.0);
-  } else if (e == enc::RGB8) {
-    cv::cvtColor(cv->image, gray, cv::COLOR_RGB2GRAY);
-  } else if (e == enc::BGR8) {
-    cv::cvtColor(cv->image, gray, cv::COLOR_BGR2GRAY);
-  } else if (e == enc::RGBA8) {
-    cv::cvtColor(cv->image, gray, cv::COLOR_RGBA2GRAY);
-  } else if (e == enc::BGRA8) {
-    cv::cvtColor(cv->image, gray, cv::COLOR_BGRA2GRAY);
-  } else {
-    throw DatasetError(what + ": unsupported encoding '" + e + "' (mono8, mono16, rgb8, bgr8, rgba8, bgra8)");
-  }
+  std::string error;
+  if (!toMono8(msg, &gray, &error)) throw DatasetError(what + ": " + error);
   return gray;
 }
 

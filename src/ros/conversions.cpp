@@ -9,12 +9,16 @@
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 
+#include "vitamin_e/io/dataset.h"
+
 namespace vitamin_e_ros {
 
 namespace enc = sensor_msgs::image_encodings;
-using vitamin_e::camera::Camera;
 using vitamin_e::camera::CalibrationError;
+using vitamin_e::camera::Camera;
 using vitamin_e::camera::DistortionModel;
+using vitamin_e::camera::Pinhole;
+using vitamin_e::io::ChannelOrder;
 
 bool isFinite(const Eigen::Isometry3d& T) {
   if (!T.matrix().allFinite()) return false;
@@ -98,32 +102,22 @@ bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error) {
   // keep the image beyond the message's lifetime).
   const cv::Mat view(static_cast<int>(msg.height), static_cast<int>(msg.width), cv_type,
                      const_cast<std::uint8_t*>(msg.data.data()), msg.step);
-  if (cv_type == CV_8UC1) {
-    view.copyTo(*gray);
-  } else if (cv_type == CV_16UC1) {
-    view.convertTo(*gray, CV_8U, 1.0 / 256.0);
-  } else if (e == enc::RGB8) {
-    cv::cvtColor(view, *gray, cv::COLOR_RGB2GRAY);
-  } else if (e == enc::BGR8) {
-    cv::cvtColor(view, *gray, cv::COLOR_BGR2GRAY);
-  } else if (e == enc::RGBA8) {
-    cv::cvtColor(view, *gray, cv::COLOR_RGBA2GRAY);
-  } else {
-    cv::cvtColor(view, *gray, cv::COLOR_BGRA2GRAY);
-  }
+  const bool rgb = e == enc::RGB8 || e == enc::RGBA8;
+  *gray = vitamin_e::io::toGray8(view, rgb ? ChannelOrder::kRgb : ChannelOrder::kBgr);
+  if (gray->data == view.data) *gray = gray->clone();  // mono8: toGray8 shares the pixels
   return true;
 }
 
 Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
   // Full-resolution intrinsics: P (rectified image, no distortion) or K and D (raw image).
-  double fx, fy, cx, cy;
+  Pinhole K;
   if (rectified) {
-    fx = info.P[0], fy = info.P[5], cx = info.P[2], cy = info.P[6];
-    if (!(fx > 0.0) || !(fy > 0.0)) {
+    K = {info.P[0], info.P[5], info.P[2], info.P[6]};
+    if (!(K.fx > 0.0) || !(K.fy > 0.0)) {
       throw CalibrationError("camera_info: rectified image but P has no focal length (P = 0: an uncalibrated camera?)");
     }
   } else {
-    fx = info.K[0], fy = info.K[4], cx = info.K[2], cy = info.K[5];
+    K = {info.K[0], info.K[4], info.K[2], info.K[5]};
   }
   // REP-104: the ROI is a window of the full-resolution image; binning then divides it.
   const double bx = info.binning_x > 1 ? info.binning_x : 1.0;
@@ -140,20 +134,17 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
   const int width = static_cast<int>(full_w / bx);
   const int height = static_cast<int>(full_h / by);
   if (roi) {
-    cx -= info.roi.x_offset;
-    cy -= info.roi.y_offset;
+    K.cx -= info.roi.x_offset;
+    K.cy -= info.roi.y_offset;
   }
-  // A binned pixel u covers full-resolution pixels [bx u, bx u + bx): its centre is at
-  // bx u + (bx - 1) / 2 (image_geometry's cx / bx drops that half-pixel shift).
-  fx /= bx;
-  cx = (cx + 0.5) / bx - 0.5;
-  fy /= by;
-  cy = (cy + 0.5) / by - 0.5;
+  // Pinhole::binned keeps the binned pixel's centre (image_geometry's cx / bx drops that
+  // half-pixel shift).
+  K = K.binned(bx, by);
   // A driver without a calibration publishes a placeholder (image_publisher: fx = fy = 1). No
   // real lens has a focal length below 1/20 of the image (a pinhole's field of view > 169 deg; a
   // 220 deg fisheye has f ~ w / 4).
-  if (fx > 0.0 && fy > 0.0 && (fx < width / 20.0 || fy < height / 20.0)) {
-    throw CalibrationError("camera_info: focal length fx=" + std::to_string(fx) + " fy=" + std::to_string(fy) +
+  if (K.fx > 0.0 && K.fy > 0.0 && (K.fx < width / 20.0 || K.fy < height / 20.0)) {
+    throw CalibrationError("camera_info: focal length fx=" + std::to_string(K.fx) + " fy=" + std::to_string(K.fy) +
                            " px for a " + std::to_string(width) + "x" + std::to_string(height) +
                            " image is a placeholder, not a calibration (an uncalibrated driver?): calibrate the "
                            "camera (camera_calibration) and give the driver its camera_info_url, or set "
@@ -163,7 +154,7 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
   const std::string& m = info.distortion_model;
   std::vector<double> d(info.D.begin(), info.D.end());
   const bool all_zero = std::all_of(d.begin(), d.end(), [](double v) { return v == 0.0; });
-  if (rectified || d.empty() || all_zero) return Camera(width, height, fx, fy, cx, cy);
+  if (rectified || d.empty() || all_zero) return Camera(width, height, K);
   if (m == "plumb_bob" || m == "rational_polynomial") {
     // The core's radial-tangential model has k1 k2 p1 p2 k3: refuse what it would silently drop.
     for (std::size_t k = 5; k < d.size(); ++k) {
@@ -176,10 +167,10 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
     }
     if (d.size() > 5) d.resize(5);
     if (d.size() == 5 && d[4] == 0.0) d.resize(4);
-    return Camera(width, height, fx, fy, cx, cy, DistortionModel::kRadialTangential, d);
+    return Camera(width, height, K, DistortionModel::kRadialTangential, d);
   }
   if (m == "equidistant" || m == "fisheye") {
-    return Camera(width, height, fx, fy, cx, cy, DistortionModel::kEquidistant, d);
+    return Camera(width, height, K, DistortionModel::kEquidistant, d);
   }
   throw CalibrationError("camera_info: unsupported distortion_model '" + m + "'");
 }
@@ -213,19 +204,10 @@ bool compressedToMono8(const sensor_msgs::CompressedImage& msg, cv::Mat* gray, s
     return false;
   }
   // OpenCV decodes colour as BGR(A) whatever the original encoding was.
-  if (decoded.depth() == CV_16U) decoded.convertTo(decoded, CV_8U, 1.0 / 256.0);
-  if (decoded.depth() != CV_8U) {
-    *error = "unsupported decoded image depth (format '" + msg.format + "')";
-    return false;
-  }
-  if (decoded.channels() == 1) {
-    *gray = decoded;
-  } else if (decoded.channels() == 3) {
-    cv::cvtColor(decoded, *gray, cv::COLOR_BGR2GRAY);
-  } else if (decoded.channels() == 4) {
-    cv::cvtColor(decoded, *gray, cv::COLOR_BGRA2GRAY);
-  } else {
-    *error = "unsupported channel count " + std::to_string(decoded.channels());
+  try {
+    *gray = vitamin_e::io::toGray8(decoded, ChannelOrder::kBgr);
+  } catch (const vitamin_e::io::DatasetError& e) {
+    *error = std::string("decoded image: ") + e.what() + " (format '" + msg.format + "')";
     return false;
   }
   return true;

@@ -52,7 +52,7 @@ TEST(Camera, PinholeProjectionMatchesK) {
   const Camera cam = pinholeCamera();
   Eigen::Vector2d uv;
   ASSERT_TRUE(cam.project(Eigen::Vector3d(1.0, -0.5, 2.0), &uv));
-  const Eigen::Vector3d h = cam.K() * Eigen::Vector3d(1.0, -0.5, 2.0);
+  const Eigen::Vector3d h = cam.pinhole().matrix() * Eigen::Vector3d(1.0, -0.5, 2.0);
   EXPECT_NEAR(uv.x(), h.x() / h.z(), 1e-12);
   EXPECT_NEAR(uv.y(), h.y() / h.z(), 1e-12);
   // Behind the camera: false, uv untouched.
@@ -62,12 +62,44 @@ TEST(Camera, PinholeProjectionMatchesK) {
   EXPECT_EQ(uv, Eigen::Vector2d(-7, -7));
 }
 
+TEST(Pinhole, ProjectUnprojectRayAndPointAgree) {
+  const vitamin_e::camera::Pinhole K{458.0, 457.0, 367.5, 248.25};
+  const Eigen::Vector2d xy(0.31, -0.22);
+  const Eigen::Vector2d uv = K.project(xy);
+  EXPECT_NEAR(uv.x(), 458.0 * 0.31 + 367.5, 1e-12);
+  EXPECT_NEAR(uv.y(), 457.0 * -0.22 + 248.25, 1e-12);
+  EXPECT_LT((K.unproject(uv) - xy).norm(), 1e-12);
+  EXPECT_EQ(K.ray(uv), Eigen::Vector3d(K.unproject(uv).x(), K.unproject(uv).y(), 1.0));
+  const Eigen::Vector3d p_c(0.62, -0.44, 2.0);  // = 2 * (xy, 1)
+  EXPECT_LT((K.projectPoint(p_c) - uv).norm(), 1e-12);
+  const Eigen::Vector3d h = K.matrix() * p_c;
+  EXPECT_LT((h.hnormalized() - uv).norm(), 1e-12);
+  // The camera's pinhole part is what it was built with.
+  const Camera cam(752, 480, 458.0, 457.0, 367.5, 248.25);
+  EXPECT_EQ(cam.pinhole(), K);
+  EXPECT_NE(cam.pinhole(), (vitamin_e::camera::Pinhole{458.0, 457.0, 367.5, 248.0}));
+}
+
+TEST(Pinhole, BinningKeepsPixelCentresAndValidityIsChecked) {
+  const vitamin_e::camera::Pinhole K{400.0, 410.0, 319.5, 239.5};
+  // 2x2 binning: full pixels 0 and 1 become binned pixel 0, centred at full 0.5.
+  const vitamin_e::camera::Pinhole B = K.binned(2.0, 2.0);
+  for (const Eigen::Vector2d full : {Eigen::Vector2d(0.5, 0.5), Eigen::Vector2d(100.5, 300.5)}) {
+    const Eigen::Vector2d binned = (full - Eigen::Vector2d(0.5, 0.5)) / 2.0;
+    EXPECT_LT((B.unproject(binned) - K.unproject(full)).norm(), 1e-12);
+  }
+  EXPECT_TRUE(K.valid());
+  EXPECT_FALSE((vitamin_e::camera::Pinhole{0.0, 410.0, 319.5, 239.5}.valid()));
+  EXPECT_FALSE((vitamin_e::camera::Pinhole{400.0, -1.0, 319.5, 239.5}.valid()));
+  EXPECT_FALSE((vitamin_e::camera::Pinhole{400.0, 410.0, NAN, 239.5}.valid()));
+}
+
 TEST(Camera, DistortionBendsTheImageAsExpected) {
   // EuRoC's barrel distortion pulls the corners towards the centre.
   const Camera cam = eurocCamera();
   const Eigen::Vector2d xy(-0.8, -0.55);
   const Eigen::Vector2d d = cam.distortNormalized(xy);
-  const Eigen::Vector2d p = cam.pinholePixel(xy);
+  const Eigen::Vector2d p = cam.pinhole().project(xy);
   const Eigen::Vector2d c(cam.cx(), cam.cy());
   EXPECT_LT((d - c).norm(), (p - c).norm() - 50.0);
   // The principal point is a fixed point of every model.
@@ -182,7 +214,7 @@ TEST(Camera, UndistortionMapsAgreeWithUnproject) {
         Eigen::Vector2d xy;
         ASSERT_TRUE(cam.unprojectNormalized(src, &xy));
         // Back through K: the output pixel (float storage: ~1e-4 px).
-        worst = std::max(worst, (cam.pinholePixel(xy) - Eigen::Vector2d(u, v)).norm());
+        worst = std::max(worst, (cam.pinhole().project(xy) - Eigen::Vector2d(u, v)).norm());
       }
     }
     EXPECT_LT(worst, 2e-3) << cam.describe();

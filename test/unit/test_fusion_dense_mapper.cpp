@@ -8,27 +8,19 @@
 using namespace vitamin_e;
 
 namespace {
-meshing::PinholeIntrinsics intrinsics() {
-  meshing::PinholeIntrinsics K;
-  K.fx = K.fy = 400.0;
-  K.cx = 320.0;
-  K.cy = 240.0;
-  K.width = 640;
-  K.height = 480;
-  return K;
-}
+meshing::PinholeImage image() { return {{400.0, 400.0, 320.0, 240.0}, 640, 480}; }
 
 // Points on the plane z = 3 (world) seen by a camera at T_w_c looking along +z.
 void planePoints(const Eigen::Isometry3d& T_w_c, std::mt19937* rng, std::vector<std::uint64_t>* ids,
                  std::vector<Eigen::Vector3d>* p_c) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::normal_distribution<double> noise(0.0, 0.003);
-  const meshing::PinholeIntrinsics K = intrinsics();
+  const meshing::PinholeImage im = image();
   ids->clear();
   p_c->clear();
   const Eigen::Isometry3d T_c_w = T_w_c.inverse();
   for (std::uint64_t id = 0; id < 3000; ++id) {
-    const Eigen::Vector3d ray_c = K.ray({u(*rng) * (K.width - 1), u(*rng) * (K.height - 1)});
+    const Eigen::Vector3d ray_c = im.K.ray({u(*rng) * (im.width - 1), u(*rng) * (im.height - 1)});
     const Eigen::Vector3d ray_w = T_w_c.linear() * ray_c;
     const double s = (3.0 - T_w_c.translation().z()) / ray_w.z();
     const Eigen::Vector3d p_w = T_w_c.translation() + s * ray_w;
@@ -42,7 +34,7 @@ TEST(DenseMapper, FusesNoisyPlaneFramesIntoAFlatMesh) {
   fusion::DenseMapperConfig cfg;
   cfg.integrator.tsdf.voxel_size = 0.05;
   cfg.integrator.tsdf.truncation = 0.15;
-  fusion::DenseMapper mapper(cfg, intrinsics());
+  fusion::DenseMapper mapper(cfg, image());
   std::mt19937 rng(5);
   std::vector<std::uint64_t> ids;
   std::vector<Eigen::Vector3d> p_c;
@@ -63,7 +55,7 @@ TEST(DenseMapper, FusesNoisyPlaneFramesIntoAFlatMesh) {
 }
 
 TEST(DenseMapper, SkipsFramesWithoutEnoughPointsOrPose) {
-  fusion::DenseMapper mapper(fusion::DenseMapperConfig{}, intrinsics());
+  fusion::DenseMapper mapper(fusion::DenseMapperConfig{}, image());
   std::vector<std::uint64_t> ids = {1, 2};
   std::vector<Eigen::Vector3d> p_c = {{0, 0, 1}, {0.1, 0, 1}};
   EXPECT_FALSE(mapper.addFrame(ids, p_c, Eigen::Isometry3d::Identity()).integrated);

@@ -13,21 +13,13 @@
 #include "vitamin_e/meshing/frame_mesher.h"
 
 using namespace vitamin_e;
-using meshing::PinholeIntrinsics;
 using Eigen::Isometry3d;
 using Eigen::Vector3d;
+using meshing::PinholeImage;
 
 namespace {
 
-PinholeIntrinsics smallK() {
-  PinholeIntrinsics K;
-  K.fx = K.fy = 200.0;
-  K.cx = 159.5;
-  K.cy = 119.5;
-  K.width = 320;
-  K.height = 240;
-  return K;
-}
+PinholeImage smallImage() { return {{200.0, 200.0, 159.5, 119.5}, 320, 240}; }
 
 // Camera at `eye` looking at `target` (optical frame: z forward, y down-ish).
 Isometry3d lookAt(const Vector3d& eye, const Vector3d& target) {
@@ -44,17 +36,17 @@ Isometry3d lookAt(const Vector3d& eye, const Vector3d& target) {
 }
 
 // Depth map (z) of a sphere (centre c, radius r, world) seen from T_w_c.
-std::vector<float> sphereDepth(const Vector3d& c, double r, const Isometry3d& T_w_c, const PinholeIntrinsics& K) {
-  std::vector<float> depth(static_cast<std::size_t>(K.width) * K.height, 0.0f);
+std::vector<float> sphereDepth(const Vector3d& c, double r, const Isometry3d& T_w_c, const PinholeImage& image) {
+  std::vector<float> depth(static_cast<std::size_t>(image.width) * image.height, 0.0f);
   const Vector3d c_c = T_w_c.inverse() * c;
-  for (int v = 0; v < K.height; ++v)
-    for (int u = 0; u < K.width; ++u) {
-      const Vector3d ray = K.ray(Eigen::Vector2d(u, v));  // z = 1
+  for (int v = 0; v < image.height; ++v)
+    for (int u = 0; u < image.width; ++u) {
+      const Vector3d ray = image.K.ray(Eigen::Vector2d(u, v));  // z = 1
       const double a = ray.squaredNorm(), b = -2.0 * ray.dot(c_c), cc = c_c.squaredNorm() - r * r;
       const double disc = b * b - 4 * a * cc;
       if (disc < 0) continue;
       const double t = (-b - std::sqrt(disc)) / (2 * a);
-      if (t > 0) depth[static_cast<std::size_t>(v) * K.width + u] = static_cast<float>(t);
+      if (t > 0) depth[static_cast<std::size_t>(v) * image.width + u] = static_cast<float>(t);
     }
   return depth;
 }
@@ -71,17 +63,17 @@ std::vector<Isometry3d> viewsAround(const Vector3d& c, double dist) {
 }
 
 // Frame mesh of the plane z = 0 (world) seen from T_w_c: jittered grid of points.
-meshing::FrameMesh planeMesh(const Isometry3d& T_w_c, const PinholeIntrinsics& K, unsigned seed) {
+meshing::FrameMesh planeMesh(const Isometry3d& T_w_c, const PinholeImage& image, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> J(-2.0, 2.0);
   std::vector<std::uint64_t> ids;
   std::vector<Eigen::Vector2d> uv;
   std::vector<double> depth;
   const Vector3d o = T_w_c.translation();
-  for (int v = 2; v < K.height - 2; v += 8)
-    for (int u = 2; u < K.width - 2; u += 8) {
+  for (int v = 2; v < image.height - 2; v += 8)
+    for (int u = 2; u < image.width - 2; u += 8) {
       const Eigen::Vector2d px(u + J(rng), v + J(rng));
-      const Vector3d d_w = T_w_c.linear() * K.ray(px);  // z-unit ray in world
+      const Vector3d d_w = T_w_c.linear() * image.K.ray(px);  // z-unit ray in world
       if (d_w.z() >= -1e-6) continue;
       const double t = -o.z() / d_w.z();  // depth z (ray has z_c = 1)
       ids.push_back(ids.size());
@@ -90,7 +82,7 @@ meshing::FrameMesh planeMesh(const Isometry3d& T_w_c, const PinholeIntrinsics& K
     }
   meshing::FrameMesherConfig cfg;
   cfg.max_edge_px = 30.0;
-  return meshing::FrameMesher(cfg).build(ids, uv, depth, K);
+  return meshing::FrameMesher(cfg).build(ids, uv, depth, image);
 }
 
 // Every undirected edge is shared by exactly two faces, in opposite directions.
@@ -101,14 +93,14 @@ void expectClosed(const fusion::TriangleMesh& mesh) {
 }  // namespace
 
 TEST(Tsdf, SphereFromManyViewsIsAccurateAndClosed) {
-  const PinholeIntrinsics K = smallK();
+  const PinholeImage image = smallImage();
   fusion::TsdfConfig cfg;
   cfg.voxel_size = 0.03;
   cfg.truncation = 0.09;
   fusion::TsdfVolume volume(cfg);
   const Vector3d c(0.31, -0.17, 0.52);
   const double r = 0.4;
-  for (const auto& T : viewsAround(c, 1.5)) volume.integrateDepth(sphereDepth(c, r, T, K), T, K);
+  for (const auto& T : viewsAround(c, 1.5)) volume.integrateDepth(sphereDepth(c, r, T, image), T, image);
   const fusion::TriangleMesh mesh = volume.extractMesh();
   ASSERT_GT(mesh.faces.size(), 1000u);
   double worst = 0.0, normal_worst = 1.0, normal_mean = 0.0;
@@ -127,7 +119,7 @@ TEST(Tsdf, SphereFromManyViewsIsAccurateAndClosed) {
 }
 
 TEST(Tsdf, PlaneFromFrameMeshesIsWithinOneVoxel) {
-  const PinholeIntrinsics K = smallK();
+  const PinholeImage image = smallImage();
   fusion::TsdfConfig cfg;
   cfg.voxel_size = 0.05;
   cfg.truncation = 0.15;
@@ -136,7 +128,7 @@ TEST(Tsdf, PlaneFromFrameMeshesIsWithinOneVoxel) {
   for (double x : {-0.5, 0.0, 0.5})
     for (double y : {-0.4, 0.4}) {
       const Isometry3d T = lookAt(Vector3d(x, y, 1.5), Vector3d(0.3 * x, 0.2, 0.0));
-      volume.integrate(planeMesh(T, K, seed++), T, K);
+      volume.integrate(planeMesh(T, image, seed++), T, image);
     }
   const fusion::TriangleMesh mesh = volume.extractMesh();
   ASSERT_GT(mesh.faces.size(), 200u);
@@ -147,13 +139,13 @@ TEST(Tsdf, PlaneFromFrameMeshesIsWithinOneVoxel) {
 }
 
 TEST(Tsdf, SameFrameTwiceOnlyChangesWeights) {
-  const PinholeIntrinsics K = smallK();
+  const PinholeImage image = smallImage();
   const Isometry3d T = lookAt(Vector3d(0.2, 0.1, 1.2), Vector3d(0.0, 0.0, 0.0));
-  const meshing::FrameMesh mesh = planeMesh(T, K, 5);
+  const meshing::FrameMesh mesh = planeMesh(T, image, 5);
   fusion::TsdfVolume once, twice;
-  once.integrate(mesh, T, K);
-  twice.integrate(mesh, T, K);
-  twice.integrate(mesh, T, K);
+  once.integrate(mesh, T, image);
+  twice.integrate(mesh, T, image);
+  twice.integrate(mesh, T, image);
   ASSERT_EQ(once.numBlocks(), twice.numBlocks());
   std::size_t n = 0;
   once.forEachVoxel([&](const Vector3d& p, const fusion::Voxel& v) {
@@ -169,7 +161,7 @@ TEST(Tsdf, SameFrameTwiceOnlyChangesWeights) {
 }
 
 TEST(Tsdf, IncrementalExtractionMatchesFullExtraction) {
-  const PinholeIntrinsics K = smallK();
+  const PinholeImage image = smallImage();
   fusion::TsdfConfig cfg;
   cfg.voxel_size = 0.04;
   cfg.truncation = 0.12;
@@ -177,16 +169,16 @@ TEST(Tsdf, IncrementalExtractionMatchesFullExtraction) {
   const auto views = viewsAround(c, 1.5);
   fusion::TsdfVolume incremental(cfg), full(cfg);
   for (std::size_t k = 0; k < views.size(); ++k) {
-    const auto depth = sphereDepth(c, 0.35, views[k], K);
-    incremental.integrateDepth(depth, views[k], K);
-    full.integrateDepth(depth, views[k], K);
+    const auto depth = sphereDepth(c, 0.35, views[k], image);
+    incremental.integrateDepth(depth, views[k], image);
+    full.integrateDepth(depth, views[k], image);
     if (k % 5 == 0) incremental.extractMesh();
   }
   // One more partial view: only part of the blocks are re-meshed.
   const Isometry3d last = lookAt(Vector3d(1.5, 0.0, 0.2), c);
   incremental.extractMesh();
-  incremental.integrateDepth(sphereDepth(c, 0.35, last, K), last, K);
-  full.integrateDepth(sphereDepth(c, 0.35, last, K), last, K);
+  incremental.integrateDepth(sphereDepth(c, 0.35, last, image), last, image);
+  full.integrateDepth(sphereDepth(c, 0.35, last, image), last, image);
   const auto a = incremental.extractMesh();
   EXPECT_LT(incremental.lastRemeshedBlocks(), incremental.numBlocks());
   const auto b = full.extractMesh();
@@ -203,7 +195,7 @@ TEST(Tsdf, IncrementalExtractionMatchesFullExtraction) {
 }
 
 TEST(Tsdf, AsyncIntegratorMatchesSynchronousAndWritesPly) {
-  const PinholeIntrinsics K = smallK();
+  const PinholeImage image = smallImage();
   fusion::TsdfIntegratorConfig sync_cfg, async_cfg;
   sync_cfg.asynchronous = false;
   async_cfg.asynchronous = true;
@@ -212,9 +204,9 @@ TEST(Tsdf, AsyncIntegratorMatchesSynchronousAndWritesPly) {
   fusion::TsdfIntegrator sync(sync_cfg), async(async_cfg);
   for (int k = 0; k < 5; ++k) {
     const Isometry3d T = lookAt(Vector3d(0.3 * k - 0.6, 0.2, 1.3), Vector3d(0.0, 0.0, 0.0));
-    const auto mesh = planeMesh(T, K, 20 + k);
-    sync.submit(mesh, T, K);
-    async.submit(mesh, T, K);
+    const auto mesh = planeMesh(T, image, 20 + k);
+    sync.submit(mesh, T, image);
+    async.submit(mesh, T, image);
   }
   async.flush();
   EXPECT_EQ(async.stats().integrated, 5u);

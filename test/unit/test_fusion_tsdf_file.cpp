@@ -22,15 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-meshing::PinholeIntrinsics smallK() {
-  meshing::PinholeIntrinsics K;
-  K.fx = K.fy = 200.0;
-  K.cx = 159.5;
-  K.cy = 119.5;
-  K.width = 320;
-  K.height = 240;
-  return K;
-}
+meshing::PinholeImage smallImage() { return {{200.0, 200.0, 159.5, 119.5}, 320, 240}; }
 
 // Camera at eye looking at the origin.
 Isometry3d lookAtOrigin(const Vector3d& eye) {
@@ -46,17 +38,17 @@ Isometry3d lookAtOrigin(const Vector3d& eye) {
 }
 
 // Depth of a sphere of radius r at the origin seen from T_w_c.
-std::vector<float> sphereDepth(double r, const Isometry3d& T_w_c, const meshing::PinholeIntrinsics& K) {
-  std::vector<float> depth(static_cast<std::size_t>(K.width) * K.height, 0.0f);
+std::vector<float> sphereDepth(double r, const Isometry3d& T_w_c, const meshing::PinholeImage& image) {
+  std::vector<float> depth(static_cast<std::size_t>(image.width) * image.height, 0.0f);
   const Vector3d c_c = T_w_c.inverse() * Vector3d::Zero();
-  for (int v = 0; v < K.height; ++v) {
-    for (int u = 0; u < K.width; ++u) {
-      const Vector3d ray = K.ray(Eigen::Vector2d(u, v));
+  for (int v = 0; v < image.height; ++v) {
+    for (int u = 0; u < image.width; ++u) {
+      const Vector3d ray = image.K.ray(Eigen::Vector2d(u, v));
       const double a = ray.squaredNorm(), b = -2.0 * ray.dot(c_c), cc = c_c.squaredNorm() - r * r;
       const double disc = b * b - 4 * a * cc;
       if (disc < 0) continue;
       const double t = (-b - std::sqrt(disc)) / (2 * a);
-      if (t > 0) depth[static_cast<std::size_t>(v) * K.width + u] = static_cast<float>(t);
+      if (t > 0) depth[static_cast<std::size_t>(v) * image.width + u] = static_cast<float>(t);
     }
   }
   return depth;
@@ -72,7 +64,7 @@ fusion::TsdfConfig config() {
 void fuse(fusion::TsdfVolume* volume, const std::vector<Vector3d>& eyes) {
   for (const Vector3d& eye : eyes) {
     const Isometry3d T = lookAtOrigin(eye);
-    volume->integrateDepth(sphereDepth(0.4, T, smallK()), T, smallK());
+    volume->integrateDepth(sphereDepth(0.4, T, smallImage()), T, smallImage());
   }
 }
 
@@ -158,12 +150,12 @@ TEST(TsdfFile, ADenseMapperSavesAndLoadsItsVolume) {
   fusion::DenseMapperConfig c;
   c.integrator.tsdf = config();
   c.integrator.asynchronous = false;
-  fusion::DenseMapper empty(c, smallK());
+  fusion::DenseMapper empty(c, smallImage());
   EXPECT_TRUE(empty.saveTsdf(dir.file("empty.vetsdf")));  // no block: a valid, empty file
   fusion::TsdfVolume source(config());
   fuse(&source, kFront);
   ASSERT_TRUE(source.save(dir.file("sphere.vetsdf")));
-  fusion::DenseMapper mapper(c, smallK());
+  fusion::DenseMapper mapper(c, smallImage());
   mapper.loadTsdf(dir.file("sphere.vetsdf"));
   EXPECT_EQ(mapper.extractMesh().faces.size(), source.extractMesh().faces.size());
   mapper.loadTsdf(dir.file("empty.vetsdf"));

@@ -76,7 +76,7 @@ TEST(Lie, Se3ExpLogRoundTrip) {
 }
 
 TEST(Projection, PinholeJacobianMatchesNumeric) {
-  Pinhole K;
+  vitamin_e::camera::Pinhole K;
   K.fx = 450;
   K.fy = 460;
   K.cx = 320;
@@ -86,13 +86,13 @@ TEST(Projection, PinholeJacobianMatchesNumeric) {
   const double h = 1e-6;
   for (int a = 0; a < 3; ++a) {
     const Eigen::Vector3d d = Eigen::Vector3d::Unit(a) * h;
-    num.col(a) = (K.project(p + d) - K.project(p - d)) / (2 * h);
+    num.col(a) = (K.projectPoint(p + d) - K.projectPoint(p - d)) / (2 * h);
   }
-  EXPECT_LT((K.jacobian(p) - num).norm(), 1e-5);
+  EXPECT_LT((K.projectPointJacobian(p) - num).norm(), 1e-5);
 }
 
 TEST(Projection, ReprojectionJacobiansMatchNumeric) {
-  Pinhole K;
+  vitamin_e::camera::Pinhole K;
   K.fx = 450;
   K.fy = 455;
   K.cx = 320;
@@ -104,7 +104,7 @@ TEST(Projection, ReprojectionJacobiansMatchNumeric) {
     const Eigen::Vector3d p_w = T_w_c * Eigen::Vector3d(randVec(0.5) + Eigen::Vector3d(0, 0, 4));
     const Eigen::Vector2d uv(300, 200);
     auto residual = [&](const Eigen::Isometry3d& T, const Eigen::Vector3d& p) {
-      return Eigen::Vector2d(uv - K.project(T.inverse() * p));
+      return Eigen::Vector2d(uv - K.projectPoint(T.inverse() * p));
     };
     Matrix26d Jc;
     Matrix23d Jp;

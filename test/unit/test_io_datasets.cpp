@@ -104,6 +104,13 @@ TEST(DatasetText, ToGray8ConvertsColorAnd16Bit) {
   const cv::Mat g = toGray8(bgr);
   ASSERT_EQ(g.type(), CV_8UC1);
   EXPECT_NEAR(g.at<uchar>(0, 0), 76, 1);  // 0.299 * 255
+  // The same pixels read as RGB are pure blue.
+  EXPECT_NEAR(toGray8(bgr, vitamin_e::io::ChannelOrder::kRgb).at<uchar>(0, 0), 29, 1);  // 0.114 * 255
+  cv::Mat bgra(2, 2, CV_8UC4, cv::Scalar(0, 255, 0, 7));                                // green, any alpha
+  EXPECT_NEAR(toGray8(bgra).at<uchar>(1, 0), 150, 1);                                   // 0.587 * 255
+  const cv::Mat mono(2, 2, CV_8UC1, cv::Scalar(9));
+  EXPECT_EQ(toGray8(mono).data, mono.data) << "mono8 is passed through, not copied";
+  EXPECT_THROW(toGray8(cv::Mat(2, 2, CV_8UC2)), DatasetError);
   cv::Mat deep(2, 2, CV_16UC1, cv::Scalar(51200));
   EXPECT_EQ(toGray8(deep).at<uchar>(1, 1), 200);
   EXPECT_THROW(toGray8(cv::Mat(2, 2, CV_32FC1)), DatasetError);

@@ -310,6 +310,11 @@ TEST(MapFile, MissingEmptyForeignAndOtherVersionFilesAreRefusedByName) {
   const std::string other = saved.dir.file("v2.vemap");
   writeAll(other, v2);
   expectRefused(other, "format v2 is not supported");
+  std::string no_version = saved.bytes;
+  no_version[15] = 'x';  // "vitamin_e map vx, ..."
+  const std::string damaged = saved.dir.file("vx.vemap");
+  writeAll(damaged, no_version);
+  expectRefused(damaged, "damaged header line");
   std::string lying = saved.bytes;
   lying.replace(lying.find(" 9 keyframes"), 12, " 8 keyframes");
   const std::string liar = saved.dir.file("liar.vemap");

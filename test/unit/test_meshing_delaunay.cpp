@@ -100,19 +100,11 @@ TEST(Delaunay, TenThousandPoints) {
 }
 
 namespace {
-PinholeIntrinsics testK() {
-  PinholeIntrinsics K;
-  K.fx = K.fy = 400.0;
-  K.cx = 320.0;
-  K.cy = 240.0;
-  K.width = 640;
-  K.height = 480;
-  return K;
-}
+PinholeImage testImage() { return {{400.0, 400.0, 320.0, 240.0}, 640, 480}; }
 }  // namespace
 
 TEST(FrameMesher, DropsStepLongAndObliqueTriangles) {
-  const PinholeIntrinsics K = testK();
+  const PinholeImage image = testImage();
   std::vector<std::uint64_t> ids;
   std::vector<Vector2d> uv;
   std::vector<double> depth;
@@ -128,7 +120,7 @@ TEST(FrameMesher, DropsStepLongAndObliqueTriangles) {
   FrameMesherConfig cfg;
   cfg.max_edge_px = 40.0;
   FrameMesher mesher(cfg);
-  const FrameMesh mesh = mesher.build(ids, uv, depth, K);
+  const FrameMesh mesh = mesher.build(ids, uv, depth, image);
   ASSERT_GT(mesh.triangles.size(), 500u);
   for (const auto& t : mesh.triangles) {
     const double lo = std::min({mesh.vertices[t[0]].inv_depth, mesh.vertices[t[1]].inv_depth,
@@ -140,35 +132,41 @@ TEST(FrameMesher, DropsStepLongAndObliqueTriangles) {
   // Without the jump filter the step is bridged by triangles that are oblique to the rays.
   cfg.max_inv_depth_jump = 10.0;
   cfg.max_normal_angle_deg = 90.0;
-  const FrameMesh bridged = FrameMesher(cfg).build(ids, uv, depth, K);
+  const FrameMesh bridged = FrameMesher(cfg).build(ids, uv, depth, image);
   EXPECT_GT(bridged.triangles.size(), mesh.triangles.size());
   cfg.max_normal_angle_deg = 75.0;
-  const FrameMesh oblique = FrameMesher(cfg).build(ids, uv, depth, K);
+  const FrameMesh oblique = FrameMesher(cfg).build(ids, uv, depth, image);
   EXPECT_EQ(oblique.triangles.size(), mesh.triangles.size());
 
   // A far outlier point creates long edges to it: they are removed.
   ids.push_back(id++);
   uv.emplace_back(630.0, 470.0);
   depth.push_back(2.0);
-  const FrameMesh with_far = mesher.build(ids, uv, depth, K);
+  const FrameMesh with_far = mesher.build(ids, uv, depth, image);
   for (const auto& t : with_far.triangles)
     for (int k = 0; k < 3; ++k)
       EXPECT_LE((with_far.vertices[t[k]].uv - with_far.vertices[t[(k + 1) % 3]].uv).norm(), 40.0);
   // Invalid input.
-  EXPECT_THROW(mesher.build({1}, {}, {}, K), std::invalid_argument);
+  EXPECT_THROW(mesher.build({1}, {}, {}, image), std::invalid_argument);
   cfg.max_edge_px = -1.0;
   EXPECT_THROW(FrameMesher{cfg}, std::invalid_argument);
 }
 
-TEST(PinholeIntrinsics, FromCameraAndValidation) {
+TEST(PinholeImage, FromCameraAndValidation) {
   const vitamin_e::camera::Camera cam(752, 480, 458.6, 457.3, 367.2, 248.4);
-  const PinholeIntrinsics K = pinholeIntrinsicsOf(cam);
-  EXPECT_EQ(K.width, 752);
-  EXPECT_DOUBLE_EQ(K.cy, 248.4);
+  const PinholeImage image = pinholeImageOf(cam);
+  EXPECT_EQ(image.width, 752);
+  EXPECT_EQ(image.height, 480);
+  EXPECT_DOUBLE_EQ(image.K.cy, 248.4);
   const Eigen::Vector3d p(0.3, -0.2, 2.0);
-  EXPECT_TRUE(K.backProject(K.project(p), 2.0).isApprox(p, 1e-12));
-  PinholeIntrinsics bad = K;
-  bad.fx = 0.0;
+  EXPECT_TRUE((image.K.ray(image.K.projectPoint(p)) * 2.0).isApprox(p, 1e-12));
+  EXPECT_TRUE(image.inImage(Eigen::Vector2d(751.0, 0.0)));
+  EXPECT_FALSE(image.inImage(Eigen::Vector2d(751.5, 0.0)));
+  PinholeImage bad = image;
+  bad.K.fx = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = image;
+  bad.height = 0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 

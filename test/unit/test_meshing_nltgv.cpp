@@ -12,21 +12,13 @@ using Eigen::Vector2d;
 using Eigen::Vector3d;
 
 namespace {
-PinholeIntrinsics testK() {
-  PinholeIntrinsics K;
-  K.fx = K.fy = 450.0;
-  K.cx = 376.0;
-  K.cy = 240.0;
-  K.width = 752;
-  K.height = 480;
-  return K;
-}
+PinholeImage testImage() { return {{450.0, 450.0, 376.0, 240.0}, 752, 480}; }
 
 // Jittered-grid pixels; true inverse depth from `truth`; multiplicative noise.
 template <typename Truth>
 FrameMesh noisyMesh(const Truth& truth, double noise, double outlier_rate, unsigned seed,
                     std::vector<double>* true_inv, bool cut_jumps = false) {
-  const PinholeIntrinsics K = testK();
+  const PinholeImage image = testImage();
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> J(-4.0, 4.0), U(0.0, 1.0);
   std::normal_distribution<double> N(0.0, noise);
@@ -48,7 +40,7 @@ FrameMesh noisyMesh(const Truth& truth, double noise, double outlier_rate, unsig
   cfg.max_normal_angle_deg = 90.0;
   cfg.max_inv_depth_jump = cut_jumps ? 0.25 : 10.0;
   cfg.drop_unused_vertices = false;
-  FrameMesh mesh = FrameMesher(cfg).build(ids, uv, depth, K);
+  FrameMesh mesh = FrameMesher(cfg).build(ids, uv, depth, image);
   true_inv->clear();
   for (const auto& v : mesh.vertices) true_inv->push_back(truth(v.uv));
   return mesh;
@@ -65,7 +57,7 @@ double meanAbsError(const FrameMesh& mesh, const std::vector<double>& truth, boo
 auto slantedPlane() {
   const Vector3d n = Vector3d(0.3, -0.2, 1.0).normalized();
   const double d = 2.5;
-  const PinholeIntrinsics K = testK();
+  const vitamin_e::camera::Pinhole K = testImage().K;
   return [=](const Vector2d& uv) { return n.dot(K.ray(uv)) / d; };
 }
 
@@ -77,7 +69,7 @@ TEST(Nltgv, FlattensNoisyPlane) {
   ASSERT_GT(mesh.vertices.size(), 1500u);
   const double before = meanAbsError(mesh, truth, false);
   NltgvDenoiser denoiser;
-  const NltgvStats stats = denoiser.denoise(&mesh, testK());
+  const NltgvStats stats = denoiser.denoise(&mesh, testImage().K);
   EXPECT_EQ(stats.warm_started, 0u);
   const double after = meanAbsError(mesh, truth, true);
   EXPECT_LT(after, 0.5 * before) << "before " << before << " after " << after;
@@ -87,7 +79,7 @@ TEST(Nltgv, RejectsOutliersOnPlane) {
   std::vector<double> truth;
   FrameMesh mesh = noisyMesh(slantedPlane(), 0.01, 0.05, 12, &truth);
   NltgvDenoiser denoiser;
-  denoiser.denoise(&mesh, testK());
+  denoiser.denoise(&mesh, testImage().K);
   int bad = 0;
   for (std::size_t i = 0; i < truth.size(); ++i)
     if (std::abs(mesh.vertices[i].inv_depth - truth[i]) > 0.1 * truth[i]) ++bad;
@@ -96,13 +88,13 @@ TEST(Nltgv, RejectsOutliersOnPlane) {
 
 TEST(Nltgv, KeepsStepEdgeSharp) {
   // Two fronto-parallel planes at 2 m (left) and 4 m (right), meshed across the step.
-  const double cx = testK().cx;
+  const double cx = testImage().K.cx;
   auto step = [cx](const Vector2d& uv) { return uv.x() < cx ? 0.5 : 0.25; };
   std::vector<double> truth;
   FrameMesh mesh = noisyMesh(step, 0.02, 0.0, 13, &truth);
   const double before = meanAbsError(mesh, truth, false);
   NltgvDenoiser denoiser;
-  denoiser.denoise(&mesh, testK());
+  denoiser.denoise(&mesh, testImage().K);
   EXPECT_LT(meanAbsError(mesh, truth, true), 0.5 * before);
   // Vertices next to the step stay on their own side: error far below the 0.25 jump.
   double worst_near_step = 0.0;
@@ -116,17 +108,17 @@ TEST(Nltgv, WarmStartByTrackId) {
   std::vector<double> truth;
   NltgvDenoiser denoiser;
   FrameMesh first = noisyMesh(slantedPlane(), 0.02, 0.0, 14, &truth);
-  denoiser.denoise(&first, testK());
+  denoiser.denoise(&first, testImage().K);
   // The next frame re-observes the same tracks with fresh noise.
   FrameMesh second = noisyMesh(slantedPlane(), 0.02, 0.0, 15, &truth);
   const double before = meanAbsError(second, truth, false);
-  const NltgvStats stats = denoiser.denoise(&second, testK());
+  const NltgvStats stats = denoiser.denoise(&second, testImage().K);
   EXPECT_EQ(stats.warm_started, second.vertices.size());
   EXPECT_EQ(stats.iterations, denoiser.config().warm_iterations);
   EXPECT_LT(meanAbsError(second, truth, true), 0.5 * before);
   denoiser.reset();
   FrameMesh third = noisyMesh(slantedPlane(), 0.02, 0.0, 16, &truth);
-  EXPECT_EQ(denoiser.denoise(&third, testK()).warm_started, 0u);
+  EXPECT_EQ(denoiser.denoise(&third, testImage().K).warm_started, 0u);
 }
 
 TEST(Nltgv, SameResultInAnyMapUnit) {
@@ -135,12 +127,12 @@ TEST(Nltgv, SameResultInAnyMapUnit) {
   const FrameMesh base = noisyMesh(slantedPlane(), 0.02, 0.03, 17, &truth);
   NltgvDenoiser reference;
   FrameMesh ref = base;
-  reference.denoise(&ref, testK());
+  reference.denoise(&ref, testImage().K);
   for (double k : {0.05, 20.0}) {
     FrameMesh scaled = base;
     for (auto& v : scaled.vertices) v.inv_depth = v.measured_inv_depth = v.measured_inv_depth / k;
     NltgvDenoiser denoiser;
-    denoiser.denoise(&scaled, testK());
+    denoiser.denoise(&scaled, testImage().K);
     double worst = 0.0;
     for (std::size_t i = 0; i < ref.vertices.size(); ++i)
       worst = std::max(worst, std::abs(scaled.vertices[i].inv_depth * k / ref.vertices[i].inv_depth - 1.0));

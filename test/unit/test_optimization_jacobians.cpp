@@ -31,7 +31,7 @@ namespace {
 constexpr double kSigma2 = 4.0;  // Geman-McClure sigma 2 px
 
 struct Case {
-  geo::Pinhole K;
+  vitamin_e::camera::Pinhole K;
   Isometry3d T_w_c;
   Vector3d p_w;
   Vector2d uv;
@@ -50,13 +50,13 @@ Case randomCase(std::mt19937& rng) {
                             .finished());
   const Vector3d p_c(1.5 * u(rng), 1.0 * u(rng), 5.5 + 4.5 * u(rng));
   c.p_w = c.T_w_c * p_c;
-  c.uv = c.K.project(p_c) + Vector2d(4.0 * u(rng), 4.0 * u(rng));
+  c.uv = c.K.projectPoint(p_c) + Vector2d(4.0 * u(rng), 4.0 * u(rng));
   return c;
 }
 
 // The residual, computed without the code under test.
 Vector2d residual(const Case& c, const Isometry3d& T_w_c, const Vector3d& p_w) {
-  return c.uv - c.K.project(T_w_c.inverse() * p_w);
+  return c.uv - c.K.projectPoint(T_w_c.inverse() * p_w);
 }
 double robustCost(const Case& c, const Isometry3d& T_w_c, const Vector3d& p_w) {
   return geo::GemanMcClure(std::sqrt(kSigma2)).rho(residual(c, T_w_c, p_w).squaredNorm());
@@ -214,7 +214,7 @@ TEST(BaJacobians, PointBlockIsWeightedGaussNewtonOfTheRobustCost) {
       c.T_w_c = base.T_w_c * geo::expSE3((Vector6d() << 0.3 * u(rng), 0.3 * u(rng), 0.2 * u(rng), 0.1 * u(rng),
                                           0.1 * u(rng), 0.1 * u(rng))
                                              .finished());
-      c.uv = c.K.project(c.T_w_c.inverse() * c.p_w) + Vector2d(3.0 * u(rng), 3.0 * u(rng));
+      c.uv = c.K.projectPoint(c.T_w_c.inverse() * c.p_w) + Vector2d(3.0 * u(rng), 3.0 * u(rng));
       views.push_back(c);
     }
     opt::detail::PointBlockRows block;

@@ -6,14 +6,17 @@
 //
 // Coordinates (see docs/DEVELOPING.md): "distorted pixels" are positions in the
 // input image; "normalized" coordinates are undistorted (x/z, y/z); "pinhole
-// pixels" are K * normalized. Camera frames are optical (z forward).
+// pixels" are K * normalized (camera::Pinhole). Camera frames are optical (z forward).
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+
+#include "vitamin_e/camera/pinhole.h"
 
 namespace vitamin_e::camera {
 
@@ -36,17 +39,21 @@ class Camera {
   // count for the model, non-finite values).
   Camera(int width, int height, double fx, double fy, double cx, double cy,
          DistortionModel model = DistortionModel::kNone, std::vector<double> distortion = {});
+  Camera(int width, int height, const Pinhole& K, DistortionModel model = DistortionModel::kNone,
+         std::vector<double> distortion = {})
+      : Camera(width, height, K.fx, K.fy, K.cx, K.cy, model, std::move(distortion)) {}
 
   int width() const { return width_; }
   int height() const { return height_; }
-  double fx() const { return fx_; }
-  double fy() const { return fy_; }
-  double cx() const { return cx_; }
-  double cy() const { return cy_; }
+  // The pinhole part: K of the undistorted ("pinhole pixel") image.
+  const Pinhole& pinhole() const { return pinhole_; }
+  double fx() const { return pinhole_.fx; }
+  double fy() const { return pinhole_.fy; }
+  double cx() const { return pinhole_.cx; }
+  double cy() const { return pinhole_.cy; }
   DistortionModel model() const { return model_; }
   const std::vector<double>& distortion() const { return distortion_; }
   bool valid() const { return width_ > 0 && height_ > 0; }
-  Eigen::Matrix3d K() const;
 
   // Camera-frame point -> distorted pixel; returns false (uv untouched) if
   // p_c.z() <= 1e-9. Optional 2x3 Jacobian of uv w.r.t. p_c.
@@ -54,8 +61,6 @@ class Camera {
                Eigen::Matrix<double, 2, 3>* d_uv_d_p_c = nullptr) const;
   // Normalized undistorted (x/z, y/z) -> distorted pixel, optional 2x2 Jacobian.
   Eigen::Vector2d distortNormalized(const Eigen::Vector2d& xy, Eigen::Matrix2d* d_uv_d_xy = nullptr) const;
-  // Normalized undistorted -> pinhole pixel (K * [x y 1]).
-  Eigen::Vector2d pinholePixel(const Eigen::Vector2d& xy) const;
   // Distorted pixel -> normalized undistorted coordinates (Gauss-Newton on
   // distortNormalized); false if it does not converge to < 1e-8 px.
   bool unprojectNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* xy) const;
@@ -72,7 +77,7 @@ class Camera {
  private:
   int width_ = 0;
   int height_ = 0;
-  double fx_ = 1.0, fy_ = 1.0, cx_ = 0.0, cy_ = 0.0;
+  Pinhole pinhole_;
   DistortionModel model_ = DistortionModel::kNone;
   std::vector<double> distortion_;
 };

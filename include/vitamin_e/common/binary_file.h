@@ -92,9 +92,11 @@ struct BinaryFileContents {
 };
 
 // Reads a file written by writeBinaryFile whose header line starts with
-// `magic` (e.g. "vitamin_e map v"). Throws BinaryFileError naming the file and
-// the problem: missing, empty, not such a file (foreign), truncated, corrupt.
-// `kind` names the file type in messages ("map", "TSDF").
-BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind);
+// `magic` (e.g. "vitamin_e map v") followed by the format version and a comma.
+// Throws BinaryFileError naming the file and the problem: missing, empty, not
+// such a file (foreign), damaged header, another format version, truncated,
+// corrupt. `kind` names the file type in messages ("map", "TSDF").
+BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind,
+                                  int version);
 
 }  // namespace vitamin_e

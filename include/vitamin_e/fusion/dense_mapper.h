@@ -16,7 +16,7 @@
 #include "vitamin_e/fusion/tsdf_integrator.h"
 #include "vitamin_e/meshing/frame_mesher.h"
 #include "vitamin_e/meshing/nltgv_denoiser.h"
-#include "vitamin_e/meshing/pinhole_intrinsics.h"
+#include "vitamin_e/meshing/pinhole_image.h"
 
 namespace vitamin_e::fusion {
 
@@ -44,9 +44,9 @@ struct DenseFrameStats {
 
 class DenseMapper {
  public:
-  DenseMapper(const DenseMapperConfig& config, const meshing::PinholeIntrinsics& K);
+  DenseMapper(const DenseMapperConfig& config, const meshing::PinholeImage& image);
 
-  // ids[i] is the track id of p_c[i] (camera frame, metres or map units).
+  // ids[i] is the track id of p_c[i] (camera frame, map units).
   DenseFrameStats addFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
                            const Eigen::Isometry3d& T_w_c);
   void flush();  // waits for the queued frames to be fused
@@ -62,7 +62,7 @@ class DenseMapper {
 
  private:
   DenseMapperConfig config_;
-  meshing::PinholeIntrinsics K_;
+  meshing::PinholeImage image_;
   meshing::FrameMesher mesher_;
   meshing::FrameMesher pruner_;
   meshing::NltgvDenoiser denoiser_;

@@ -35,7 +35,7 @@ class TsdfIntegrator {
   TsdfIntegrator(const TsdfIntegrator&) = delete;
   TsdfIntegrator& operator=(const TsdfIntegrator&) = delete;
 
-  void submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c, const meshing::PinholeIntrinsics& K);
+  void submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c, const meshing::PinholeImage& image);
   // Blocks until every submitted frame is integrated (or dropped).
   void flush();
   TriangleMesh extractMesh();
@@ -50,7 +50,7 @@ class TsdfIntegrator {
   struct Job {
     meshing::FrameMesh mesh;
     Eigen::Isometry3d T_w_c;
-    meshing::PinholeIntrinsics K;
+    meshing::PinholeImage image;
   };
   void run();
   void integrateJob(const Job& job);

@@ -21,13 +21,14 @@
 
 #include "vitamin_e/fusion/triangle_mesh.h"
 #include "vitamin_e/meshing/frame_mesh.h"
-#include "vitamin_e/meshing/pinhole_intrinsics.h"
+#include "vitamin_e/meshing/pinhole_image.h"
 
 namespace vitamin_e::fusion {
 
 struct TsdfConfig {
-  double voxel_size = 0.05;    // metres
-  double truncation = 0.15;    // metres, band half-width around the surface
+  // Lengths are in the unit of the poses and depths given: map units in the SLAM.
+  double voxel_size = 0.05;
+  double truncation = 0.15;    // band half-width around the surface
   double max_weight = 100.0;   // cap of the running weight
   int block_voxels = 8;        // voxels per block side
   double min_depth = 0.1;      // rasterised depths outside [min_depth, max_depth] are ignored
@@ -46,7 +47,7 @@ struct TsdfFileError : std::runtime_error {
 };
 
 struct Voxel {
-  float sdf = 0.0f;     // metres, in [-truncation, truncation]; > 0 in front of the surface
+  float sdf = 0.0f;     // in [-truncation, truncation]; > 0 in front of the surface
   float weight = 0.0f;  // 0: never observed
 };
 
@@ -67,14 +68,14 @@ class TsdfVolume {
   // Integrates a frame mesh (vertices uv + inv_depth in the camera frame) seen
   // from pose T_w_c.
   IntegrationStats integrate(const meshing::FrameMesh& mesh, const Eigen::Isometry3d& T_w_c,
-                             const meshing::PinholeIntrinsics& K);
-  // Integrates a depth map directly (z along the optical axis, metres; 0 or
-  // non-finite: no measurement), CV-free: row-major width*height floats at the
-  // resolution of K.
+                             const meshing::PinholeImage& image);
+  // Integrates a depth map directly (z along the optical axis, map units; 0 or
+  // non-finite: no measurement), CV-free: row-major width*height floats of the
+  // image's size.
   IntegrationStats integrateDepth(const std::vector<float>& depth, const Eigen::Isometry3d& T_w_c,
-                                  const meshing::PinholeIntrinsics& K);
-  // Rasterises a mesh into a depth map (row-major, 0 where empty) of K's size.
-  static std::vector<float> rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeIntrinsics& K);
+                                  const meshing::PinholeImage& image);
+  // Rasterises a mesh into a depth map (row-major, 0 where empty) of the image's size.
+  static std::vector<float> rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeImage& image);
 
   // Re-runs marching cubes on the blocks changed since the last update
   // (the incremental part); returns the number of blocks re-meshed.

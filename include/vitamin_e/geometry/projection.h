@@ -1,6 +1,7 @@
 #pragma once
-// Pinhole projection and its analytic Jacobians, plus the Geman-McClure kernel: shared by
-// PnP, triangulation and bundle adjustment so that the math lives in one place.
+// The reprojection Jacobians (the pinhole projection itself is camera::Pinhole) and the
+// Geman-McClure kernel: shared by PnP, triangulation and bundle adjustment so that the math
+// lives in one place.
 //
 // Residual model (paper Eq. 7): r = u - phi(R^T (p_w - t)) with T_w_c = (R, t).
 // Camera perturbation: T_w_c <- T_w_c * expSE3(delta), delta = (rho, phi) (see lie.h).
@@ -8,6 +9,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "vitamin_e/camera/pinhole.h"
 #include "vitamin_e/geometry/lie.h"
 
 namespace vitamin_e {
@@ -34,28 +36,11 @@ struct GemanMcClure {
   }
 };
 
-// Pinhole intrinsics (pinhole pixels = K * normalized).
-struct Pinhole {
-  double fx = 1.0, fy = 1.0, cx = 0.0, cy = 0.0;
-  Eigen::Vector2d project(const Eigen::Vector3d& p_c) const {
-    const double iz = 1.0 / p_c.z();
-    return Eigen::Vector2d(fx * p_c.x() * iz + cx, fy * p_c.y() * iz + cy);
-  }
-  // d project / d p_c.
-  Matrix23d jacobian(const Eigen::Vector3d& p_c) const {
-    const double iz = 1.0 / p_c.z();
-    const double iz2 = iz * iz;
-    Matrix23d J;
-    J << fx * iz, 0.0, -fx * p_c.x() * iz2, 0.0, fy * iz, -fy * p_c.y() * iz2;
-    return J;
-  }
-};
-
 // Jacobians of r = uv - project(T_w_c^-1 p_w) w.r.t. the camera perturbation delta (2x6)
 // and the point p_w (2x3), given p_c = T_w_c^-1 p_w and R_w_c.
-inline void reprojectionJacobians(const Pinhole& K, const Eigen::Vector3d& p_c, const Eigen::Matrix3d& R_w_c,
+inline void reprojectionJacobians(const camera::Pinhole& K, const Eigen::Vector3d& p_c, const Eigen::Matrix3d& R_w_c,
                                   Matrix26d* J_cam, Matrix23d* J_point) {
-  const Matrix23d Jproj = K.jacobian(p_c);
+  const Matrix23d Jproj = K.projectPointJacobian(p_c);
   if (J_cam) {
     J_cam->leftCols<3>() = Jproj;               // -(Jproj * -I)
     J_cam->rightCols<3>() = -Jproj * skew(p_c);  // -(Jproj * [p_c]x)

@@ -48,7 +48,12 @@ std::unique_ptr<Dataset> openDataset(const std::string& path, const DatasetOptio
 // Nanoseconds text -> seconds text ("1403715273262142976" -> "1403715273.262142976");
 // throws DatasetError if not all digits.
 std::string nanosecondsToSecondsText(const std::string& ns);
-// Any image -> CV_8UC1 (bgr/bgra -> gray, 16-bit -> >> 8). Empty stays empty.
-cv::Mat toGray8(const cv::Mat& image);
+// Channel order of a colour image: OpenCV's (imread, imdecode) or an RGB(A) message.
+enum class ChannelOrder { kBgr, kRgb };
+// The one mono8 conversion (folders, bags, ROS messages): an 8- or 16-bit image with 1, 3
+// or 4 channels -> CV_8UC1. Colour -> gray with OpenCV's weights, 16-bit -> scaled by 1/256.
+// An 8-bit single-channel image is returned as it is (shared, not copied). Empty stays empty.
+// Throws DatasetError for another depth or channel count.
+cv::Mat toGray8(const cv::Mat& image, ChannelOrder order = ChannelOrder::kBgr);
 
 }  // namespace vitamin_e::io

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "vitamin_e/meshing/pinhole_intrinsics.h"
+#include "vitamin_e/meshing/pinhole_image.h"
 
 namespace vitamin_e::meshing {
 
@@ -22,8 +22,8 @@ struct FrameMesh {
   std::vector<Eigen::Vector3i> triangles;  // indices into vertices
 
   // Camera-frame position of vertex i (z = 1 / inv_depth).
-  Eigen::Vector3d point(std::size_t i, const PinholeIntrinsics& K) const {
-    return K.backProject(vertices[i].uv, 1.0 / vertices[i].inv_depth);
+  Eigen::Vector3d point(std::size_t i, const camera::Pinhole& K) const {
+    return K.ray(vertices[i].uv) * (1.0 / vertices[i].inv_depth);
   }
   // Undirected edges (i < j) of the triangles, sorted and unique.
   std::vector<std::pair<int, int>> edges() const;

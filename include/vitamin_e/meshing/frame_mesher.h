@@ -29,13 +29,13 @@ class FrameMesher {
   // ids, uv (pinhole pixels) and depth (z in the camera frame) are parallel arrays.
   // Points outside the image or outside [min_depth, max_depth] are ignored.
   FrameMesh build(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector2d>& uv,
-                  const std::vector<double>& depth, const PinholeIntrinsics& K) const;
+                  const std::vector<double>& depth, const PinholeImage& image) const;
   // Same with camera-frame points p_c (uv = K * p_c, depth = p_c.z()).
   FrameMesh buildFromPoints(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
-                            const PinholeIntrinsics& K) const;
+                            const PinholeImage& image) const;
   // Re-applies the triangle filters to a mesh (e.g. after denoising changed the
   // inverse depths) and drops unused vertices if configured.
-  void prune(FrameMesh* mesh, const PinholeIntrinsics& K) const;
+  void prune(FrameMesh* mesh, const camera::Pinhole& K) const;
   const FrameMesherConfig& config() const { return config_; }
 
  private:

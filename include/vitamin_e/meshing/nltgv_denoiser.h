@@ -52,7 +52,7 @@ class NltgvDenoiser {
   explicit NltgvDenoiser(const NltgvConfig& config = {});
   // Replaces mesh->vertices[i].inv_depth by the smoothed value (the data term
   // is measured_inv_depth). Needs the intrinsics for normalized coordinates.
-  NltgvStats denoise(FrameMesh* mesh, const PinholeIntrinsics& K);
+  NltgvStats denoise(FrameMesh* mesh, const camera::Pinhole& K);
   // Forgets the warm start.
   void reset();
   const NltgvConfig& config() const { return config_; }

@@ -1,7 +1,7 @@
 #pragma once
 // Bundle-adjustment problem (paper Eq. 7): cameras T_w_c, points p_w, observations uv in
 // undistorted pinhole pixels. Residual r_ij = uv_ij - phi(R_j^T (p_i - t_j)), T_w_c = (R_j, t_j),
-// phi = pinhole projection with fx, fy, cx, cy. Robust cost: Geman-McClure in px^2 units,
+// phi = the pinhole projection K (camera::Pinhole::projectPoint). Robust cost: Geman-McClure in px^2 units,
 // rho(s) = sigma^2 s / (sigma^2 + s), s = |r|^2 (~ s for inliers, saturates at sigma^2).
 //
 // Gauge: a monocular BA is defined up to a similarity (7 DoF). The solvers do NOT fix anything
@@ -11,6 +11,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <vector>
+
+#include "vitamin_e/camera/pinhole.h"
 
 namespace vitamin_e {
 namespace optimization {
@@ -32,7 +34,7 @@ struct BaObservation {
 };
 
 struct BaProblem {
-  double fx = 1.0, fy = 1.0, cx = 0.0, cy = 0.0;
+  camera::Pinhole K;
   std::vector<BaCamera> cameras;
   std::vector<BaPoint> points;
   std::vector<BaObservation> observations;

@@ -13,7 +13,7 @@ namespace optimization {
 struct SyntheticBaConfig {
   int num_cameras = 10;
   int num_points = 1000;
-  double fx = 450.0, fy = 450.0, cx = 320.0, cy = 240.0;
+  camera::Pinhole K{450.0, 450.0, 320.0, 240.0};
   int width = 640, height = 480;
   double step_m = 0.1;                      // distance between consecutive cameras
   double min_depth = 3.0, max_depth = 8.0;  // point depth in its reference camera

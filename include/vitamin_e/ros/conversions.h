@@ -30,8 +30,8 @@ Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose);
 Eigen::Isometry3d fromTransformMsg(const geometry_msgs::Transform& transform);
 
 // Image message -> CV_8UC1 owning its pixels (mono8 copied; rgb8, bgr8, rgba8,
-// bgra8 converted to gray; mono16 / 16UC1 scaled by 1/256). Returns false and
-// sets *error for any other encoding or a malformed message.
+// bgra8 converted to gray; mono16 / 16UC1 scaled by 1/256: io::toGray8 on a view of
+// the message). Returns false and sets *error for any other encoding or a malformed message.
 bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error);
 
 // camera_info -> camera model of the image that comes with it. rectified: an
@@ -45,8 +45,8 @@ vitamin_e::camera::Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bo
 bool isRectifiedTopic(const std::string& topic);
 
 // sensor_msgs/CompressedImage (jpeg or png, as compressed_image_transport writes
-// them) -> CV_8UC1, decoded with OpenCV; colour becomes gray, 16-bit is scaled by
-// 1/256. Returns false and sets *error otherwise.
+// them) -> CV_8UC1, decoded with OpenCV, then io::toGray8 (colour becomes gray, 16-bit
+// is scaled by 1/256). Returns false and sets *error otherwise.
 bool compressedToMono8(const sensor_msgs::CompressedImage& msg, cv::Mat* gray, std::string* error);
 // "none" | "radial-tangential" | "equidistant".
 std::string distortionName(vitamin_e::camera::DistortionModel model);

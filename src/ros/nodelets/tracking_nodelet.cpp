@@ -12,6 +12,7 @@
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include "save_file_service.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/ros/conversions.h"
@@ -700,53 +701,29 @@ bool TrackingNodelet::writePoints(const std::vector<vitamin_e::pipeline::MapPoin
 }
 
 bool TrackingNodelet::saveTrajectoryService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
-  const std::string path = req.path.empty() ? trajectory_file_ : req.path;
-  if (path.empty()) {
-    res.success = false;
-    res.message = "no path given and ~trajectory_file not set";
-    return true;
-  }
-  res.success = saveTrajectory(path, &res.message);
-  NODELET_INFO("%s", res.message.c_str());
+  auto save = [this](const std::string& path, std::string* message) { return saveTrajectory(path, message); };
+  if (answerSaveFile(req, trajectory_file_, "trajectory_file", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 
 bool TrackingNodelet::saveMapService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
-  const std::string path = req.path.empty() ? save_map_ : req.path;
-  if (path.empty()) {
-    res.success = false;
-    res.message = "no path given and ~save_map not set";
-    return true;
-  }
   // The map is the SLAM thread's: copied there between two frames, written here.
-  vitamin_e::map::MapFileContents contents;
-  std::string why;
-  if (runOnSlamThread([&] { contents = system_->exportMap(); }, &why)) {
-    res.success = writeMap(contents, path, &res.message);
-  } else {
-    res.success = false;
-    res.message = why;
-  }
-  NODELET_INFO("%s", res.message.c_str());
+  auto save = [this](const std::string& path, std::string* message) {
+    vitamin_e::map::MapFileContents contents;
+    if (!runOnSlamThread([&] { contents = system_->exportMap(); }, message)) return false;
+    return writeMap(contents, path, message);
+  };
+  if (answerSaveFile(req, save_map_, "save_map", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 
 bool TrackingNodelet::exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
-  const std::string path = req.path.empty() ? export_points_ : req.path;
-  if (path.empty()) {
-    res.success = false;
-    res.message = "no path given and ~export_points not set";
-    return true;
-  }
-  std::vector<vitamin_e::pipeline::MapPoint3> points;
-  std::string why;
-  if (runOnSlamThread([&] { points = mapPointsInMap(); }, &why)) {
-    res.success = writePoints(points, path, &res.message);
-  } else {
-    res.success = false;
-    res.message = why;
-  }
-  NODELET_INFO("%s", res.message.c_str());
+  auto save = [this](const std::string& path, std::string* message) {
+    std::vector<vitamin_e::pipeline::MapPoint3> points;
+    if (!runOnSlamThread([&] { points = mapPointsInMap(); }, message)) return false;
+    return writePoints(points, path, message);
+  };
+  if (answerSaveFile(req, export_points_, "export_points", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 

@@ -18,6 +18,7 @@
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include "save_file_service.h"
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TsdfMeshingConfig.h"
@@ -158,13 +159,9 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
                              static_cast<unsigned long>(msg->frame_index));
       return;
     }
-    meshing::PinholeIntrinsics K;
-    K.fx = msg->fx;
-    K.fy = msg->fy;
-    K.cx = msg->cx;
-    K.cy = msg->cy;
-    K.width = static_cast<int>(msg->width);
-    K.height = static_cast<int>(msg->height);
+    const meshing::PinholeImage image{{msg->fx, msg->fy, msg->cx, msg->cy},
+                                      static_cast<int>(msg->width),
+                                      static_cast<int>(msg->height)};
     std::vector<Eigen::Vector3d> p_c;
     p_c.reserve(n);
     for (const auto& p : msg->points_c) p_c.emplace_back(p.x, p.y, p.z);
@@ -182,16 +179,15 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     }
     segment_ = msg->segment;
     try {
-      K.validate();
+      image.validate();
       if (!dense_) {
-        dense_ = std::make_unique<fusion::DenseMapper>(dense_config_, K);
-        dense_K_ = K;
+        dense_ = std::make_unique<fusion::DenseMapper>(dense_config_, image);
+        dense_image_ = image;
         if (loaded_tsdf_) {
           dense_->loadTsdf(load_tsdf_);  // the file checked at start-up
           loaded_tsdf_.reset();
         }
-      } else if (K.fx != dense_K_.fx || K.fy != dense_K_.fy || K.cx != dense_K_.cx || K.cy != dense_K_.cy ||
-                 K.width != dense_K_.width || K.height != dense_K_.height) {
+      } else if (image != dense_image_) {
         NODELET_ERROR_THROTTLE(2.0, "frame %lu has other intrinsics than the first frame: not fused",
                                static_cast<unsigned long>(msg->frame_index));
         return;
@@ -264,33 +260,26 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     return true;
   }
 
+  // Why a save is refused before a path is looked at ("": it is not).
+  std::string saveRefusal() const {
+    return !config_ok_ ? "no TSDF (bad configuration or dense.enabled false)" : !dense_ ? "no frame fused yet" : "";
+  }
+
   bool saveTsdfService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string path = req.path.empty() ? save_tsdf_ : req.path;
-    if (!dense_ || path.empty()) {
-      res.success = false;
-      res.message = !config_ok_ ? "no TSDF (bad parameters)"
-                    : !dense_   ? "no frame fused yet"
-                                : "no path given and ~save_tsdf not set";
-      return true;
+    auto save = [this](const std::string& path, std::string* message) { return saveTsdf(path, message); };
+    if (answerSaveFile(req, save_tsdf_, "save_tsdf", saveRefusal(), &res, save)) {
+      NODELET_INFO("%s", res.message.c_str());
     }
-    res.success = saveTsdf(path, &res.message);
-    NODELET_INFO("%s", res.message.c_str());
     return true;
   }
 
   bool saveMeshService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const std::string path = req.path.empty() ? mesh_file_ : req.path;
-    if (!dense_ || path.empty()) {
-      res.success = false;
-      res.message = !config_ok_ ? "no TSDF (bad configuration or dense.enabled false)"
-                    : !dense_   ? "no frame fused yet"
-                                : "no path given and ~mesh_file not set";
-      return true;
+    auto save = [this](const std::string& path, std::string* message) { return saveMesh(path, message); };
+    if (answerSaveFile(req, mesh_file_, "mesh_file", saveRefusal(), &res, save)) {
+      NODELET_INFO("%s", res.message.c_str());
     }
-    res.success = saveMesh(path, &res.message);
-    NODELET_INFO("%s", res.message.c_str());
     return true;
   }
 
@@ -303,7 +292,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   fusion::DenseMapperConfig dense_config_;
   bool config_ok_ = false;
   std::unique_ptr<fusion::DenseMapper> dense_;  // made at the first frame (its intrinsics)
-  meshing::PinholeIntrinsics dense_K_;
+  meshing::PinholeImage dense_image_;
   std::size_t frames_integrated_ = 0;
   std::size_t published_markers_ = 0;
   unsigned segment_ = 0;  // the tracker's segment of the frames fused
