@@ -24,6 +24,8 @@ ve_wants_help() {
 #   ve_suite_info_begin OUT COMMAND ARGS...    ve_suite_info_end OUT
 ve_suite_info_begin() {
   local out="$1"; shift
+  # What the results depend on (an edited README does not change them).
+  local ve_result_paths="src include cmake CMakeLists.txt package.xml config scripts bench"
   {
     printf 'command:'
     [ -n "${VE_SHARED:-}" ] && printf ' VE_SHARED=%q' "$VE_SHARED"
@@ -31,7 +33,8 @@ ve_suite_info_begin() {
     printf ' %q' "$@"
     echo
     echo "commit: $(git -C "$VE_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(
-      [ -n "$(git -C "$VE_ROOT" status --porcelain --untracked-files=no 2>/dev/null)" ] && echo ' (with uncommitted changes)')"
+      [ -n "$(git -C "$VE_ROOT" status --porcelain --untracked-files=no -- $ve_result_paths 2>/dev/null)" ] \
+        && echo ' (with uncommitted changes)')"
     echo "cpu: $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)"
     echo "cores: $(nproc)"
     echo "memory_gb: $(awk '/^MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)"
