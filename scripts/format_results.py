@@ -127,6 +127,9 @@ def sequence_row(suite_dir, name, dataset):
              rss=stats.get("peak_rss_mb"))
     # A run in a loaded map has no initialization: "after init" does not apply.
     r["loaded_map"] = bool(stats.get("loaded_map")) and (stats.get("first_init_frame", -1) or 0) < 0
+    if stats.get("interrupted"):
+        r["status"] = "interrupted after %s frames" % stats.get("frames")
+        return r
     ev = last_json_line(os.path.join(run, "evaluate.txt"))
     r["ate"] = ev.get("ate_rmse_m") if ev else None
     if r["success"] is None and ev:

@@ -47,6 +47,9 @@ fake_run "$d/real/LOW" 100 0.5 0.8 1 0 20 100 0.05 1.0
 printf 'MH_01_easy ../renders/full/MH_01_easy\nV1_01_easy ../renders/full/V1_01_easy\nV2_01_easy ../renders/full/V2_01_easy\n' >"$d/renders_full/list.txt"
 info "$d/renders_full"
 fake_run "$d/renders_full/MH_01_easy" 3638 1.0 1.0 0 0 23.1 110 0.0015 2.0
+fake_run "$d/renders_full/V2_01_easy" 1000 1.0 1.0 0 0 20 100 0.001 1.0
+sed -i 's/^{/{"interrupted": true, /' "$d/renders_full/V2_01_easy/stats.json"
+printf 'V2_02_medium ../renders/full/V2_02_medium\n' >>"$d/renders_full/list.txt"
 mkdir -p "$d/renders_full/V1_01_easy"
 echo /nowhere/V1_01_easy >"$d/renders_full/V1_01_easy/missing.txt"
 mkdir -p "$d/map_reuse"
@@ -63,7 +66,8 @@ check "ok row" "$r" "| KITTI_06_frames_0-50 | 51 | 2.13 | 100.0 | 100.0 | 0 | 0 
 check "relocalizations" "$r" "| KITTI_07_frames_0-159 | 160 | 42.48 | 98.8 | 98.7 | 0 | 2 | 109.0 | 188 | 3.2 |"
 check "under 90 % is a failure" "$r" "| LOW | 100 | fail (5.00 cm over 50.0 % of frames) | 50.0 | 80.0 | 1 | 0 |"
 check "not rendered" "$r" "| V1_01_easy | | not rendered |"
-check "not run (no folder)" "$r" "| V2_01_easy | | not run |"
+check "not run (no folder)" "$r" "| V2_02_medium | | not run |"
+check "interrupted run" "$r" "| V2_01_easy | 1000 | interrupted after 1000 frames |"
 check "suite not run: rows from config/suites" "$r" "| V1_01_easy_30s | | not run |"
 check "a run in a loaded map has no 'after init'" "$r" "| LOC | 200 | 0.05 | 100.0 | n/a (map loaded) | 0 | 1 |"
 check "header machine" "$r" "- Machine: Test CPU, 2 cores, 24 GB, Test OS."
@@ -72,7 +76,7 @@ check "table command" "$r" "Command: \`./scripts/evaluate_suite.sh config/suites
 check "load range" "$r" "load average (1 min) 1.0-3.2 at the sequences' starts"
 check "peers" "$r" "| KITTI_07_frames_0-159 | 42.48 cm, 98.8 % of frames, 0 re-initializations, 2 relocalizations | 28-34 cm"
 check "readme table" "$tmp/README.md" "| KITTI_06_frames_0-50 | 2.13 cm, 100.0 % of frames, 0 re-initializations | fails"
-check "readme summary" "$tmp/README.md" "Whole EuRoC renders: 1 of 3 sequences, ATE 0.15-0.15 cm"
+check "readme summary" "$tmp/README.md" "Whole EuRoC renders: 1 of 4 sequences, ATE 0.15-0.15 cm"
 check "readme keeps the rest" "$tmp/README.md" "Outro"
 if grep -q "OLD TABLE" "$tmp/README.md"; then echo "FAIL: the old README block is still there"; fails=$((fails + 1)); fi
 
