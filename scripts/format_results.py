@@ -193,14 +193,18 @@ def summary(rows):
     not_ok = [r for r in rows if r["status"] != "ok"]
     if not ok:
         return "no results (%s)" % ", ".join(sorted(set(r["status"] for r in not_ok))) if rows else "empty"
-    ates = [r["ate"] * 100 for r in ok]
-    s = "%d of %d sequences, ATE %.2f-%.2f cm" % (len(ok), len(rows), min(ates), max(ates))
+    def span(values, scale, digits):
+        lo, hi = fmt(min(values), scale, digits), fmt(max(values), scale, digits)
+        return lo if lo == hi else lo + "-" + hi
+
+    def count(n, word):
+        return "%d %s%s" % (n, word, "" if n == 1 else "s")
+    s = "%d of %d sequences, ATE %s cm" % (len(ok), len(rows), span([r["ate"] for r in ok], 100, 2))
     after = [r["after_init"] for r in ok if r["after_init"] is not None and not r.get("loaded_map")]
     if after:
-        s += ", %s-%s %% of frames tracked after initialization" % (
-            fmt(min(after), 100, 1), fmt(max(after), 100, 1))
-    s += ", %d re-initializations, %d relocalizations in all" % (
-        sum(r["retries"] or 0 for r in ok), sum(r["relocs"] or 0 for r in ok))
+        s += ", %s %% of frames tracked after initialization" % span(after, 100, 1)
+    s += ", %s, %s in all" % (count(sum(r["retries"] or 0 for r in ok), "re-initialization"),
+                              count(sum(r["relocs"] or 0 for r in ok), "relocalization"))
     if not_ok:
         s += "; %s: %s" % (", ".join(sorted(set(r["status"] for r in not_ok))),
                            ", ".join(r["name"] for r in not_ok))
