@@ -289,7 +289,8 @@ def main():
            "Written %s by `%s`." % (now, a.command), "",
            "- Machine: %s." % ("; ".join(machines) if machines else "not recorded"),
            "- Commit: %s." % (", ".join(commits) if commits else "not recorded"),
-           "- Runs made by: %s." % ("`%s`" % runs_by if runs_by else
+           "- Runs made by: %s." % (("`%s`%s" % (runs_by.split(" (", 1)[0], (" (" + runs_by.split(" (", 1)[1])
+                                                  if " (" in runs_by else "")) if runs_by else
                                     "not recorded (the `evaluate_suite.sh` command of each table)"),
            "- Each sequence: `./scripts/run_dataset.sh DATASET OUT/NAME` (the config picked by the "
            "dataset's kind: `config/kitti.yaml`, `config/euroc.yaml`), then `./scripts/evaluate.sh "
