@@ -19,6 +19,8 @@ if(CATKIN_ENABLE_TESTING)
     target_link_libraries(${test_name} vitamin_e_${test_module})
     target_compile_definitions(${test_name} PRIVATE VITAMIN_E_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}")
   endforeach()
+  # ./scripts/results.sh on a made-up suite output (no data, seconds).
+  add_test(NAME script_results COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_results.sh)
   # Tests of the offline tools and the ROS layer (test/ros/*.test, test/tools/*.cpp).
   if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/cmake/ros_tests.cmake)
     include(cmake/ros_tests.cmake)

@@ -19,3 +19,33 @@ ve_wants_help() {
   for a in "$@"; do case "$a" in -h|--help) return 0 ;; esac; done
   return 1
 }
+# Provenance of an evaluation run, read by ./scripts/results.sh: OUT/run_info.txt gets the
+# command (with the data roots), commit, machine, start time and load; ..._end adds the end.
+#   ve_suite_info_begin OUT COMMAND ARGS...    ve_suite_info_end OUT
+ve_suite_info_begin() {
+  local out="$1"; shift
+  # What the results depend on (an edited README does not change them).
+  local ve_result_paths="src include cmake CMakeLists.txt package.xml config scripts bench"
+  {
+    printf 'command:'
+    [ -n "${VE_SHARED:-}" ] && printf ' VE_SHARED=%q' "$VE_SHARED"
+    [ -n "${VE_RENDERS:-}" ] && printf ' VE_RENDERS=%q' "$VE_RENDERS"
+    printf ' %q' "$@"
+    echo
+    echo "commit: $(git -C "$VE_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(
+      [ -n "$(git -C "$VE_ROOT" status --porcelain --untracked-files=no -- $ve_result_paths 2>/dev/null)" ] \
+        && echo ' (with uncommitted changes)')"
+    echo "cpu: $(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)"
+    echo "cores: $(nproc)"
+    echo "memory_gb: $(awk '/^MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)"
+    echo "os: $(. /etc/os-release 2>/dev/null && echo "${PRETTY_NAME:-unknown}")"
+    echo "started: $(date -u '+%Y-%m-%d %H:%M UTC')"
+    echo "load_start: $(cut -d ' ' -f 1-3 /proc/loadavg)"
+  } >"$out/run_info.txt"
+}
+ve_suite_info_end() {
+  {
+    echo "finished: $(date -u '+%Y-%m-%d %H:%M UTC')"
+    echo "load_end: $(cut -d ' ' -f 1-3 /proc/loadavg)"
+  } >>"$1/run_info.txt"
+}

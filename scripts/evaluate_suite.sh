@@ -1,16 +1,20 @@
 #!/usr/bin/env bash
 # Runs vitamin_e on a list of sequences and prints the paper's table (Markdown).
-#   ./scripts/evaluate_suite.sh LIST [--out DIR] [--runs-only] [-- run_dataset.sh flags...]
+#   ./scripts/evaluate_suite.sh LIST [--out DIR] [-- run_dataset.sh flags...]
 # LIST: one sequence per line, `NAME DATASET_PATH [GROUNDTRUTH [SENSOR_YAML]]` ('#'
 # comments; relative paths are taken from the repository's root, so
-# config/suites/real.txt names ../shared/...: VE_SHARED=DIR puts it elsewhere). GROUNDTRUTH defaults to
+# config/suites/real.txt names ../shared/...: VE_SHARED=DIR puts it elsewhere, and
+# ../renders/... is under VE_RENDERS=DIR, default ../renders). GROUNDTRUTH defaults to
 # DATASET_PATH/groundtruth_cam0_tum.txt, else DATASET_PATH/poses.txt (KITTI), else
 # the dataset's EuRoC ground truth (body pose, turned into the camera's with the
 # dataset's own sensor.yaml). SENSOR_YAML: GROUNDTRUTH is a body pose, camera =
 # body * T_BS of that file (e.g. the shared EuRoC TUM ground truth files).
 # Each sequence runs `./scripts/run_dataset.sh DATASET OUT/NAME` (writes
 # trajectory.txt and stats.json), then `./scripts/evaluate.sh` (Sim(3) ATE).
-# OUT defaults to out/suite. The table also goes to OUT/results.md.
+# OUT defaults to out/suite. The table also goes to OUT/results.md; OUT/run_info.txt
+# records the command, commit, machine, start and end time and load, OUT/list.txt the
+# list, OUT/NAME/load.txt the load before that run. A DATASET_PATH that does not exist
+# is not run: OUT/NAME/missing.txt names it and its row says so (e.g. not rendered yet).
 # Columns: success = tracked / all frames (the paper's); after init = tracked /
 # frames from the first initialization on; init retries = new maps after a loss;
 # relocalizations = losses recovered in the existing map; peak RSS of the whole run.
@@ -32,6 +36,10 @@ done
 [ -f "$list" ] || ve_die "$list: no such list file"
 mkdir -p "$out"
 py=/usr/bin/python3
+cp "$list" "$out/list.txt"
+
+# What produced these results (read by ./scripts/results.sh).
+ve_suite_info_begin "$out" ./scripts/evaluate_suite.sh "$list" --out "$out" ${run_flags[@]+-- "${run_flags[@]}"}
 
 # Reads KEY (dotted path) from a JSON file; prints "" if absent.
 json_get() {
@@ -69,6 +77,7 @@ while read -r name dataset gt sensor rest; do
     case "$1" in
       /*|"") echo "$1" ;;
       ../shared/*) echo "${VE_SHARED:-$VE_ROOT/../shared}/${1#../shared/}" ;;
+      ../renders/*) echo "${VE_RENDERS:-$VE_ROOT/../renders}/${1#../renders/}" ;;
       *) echo "$VE_ROOT/$1" ;;
     esac
   }
@@ -84,7 +93,16 @@ while read -r name dataset gt sensor rest; do
   fi
   run="$out/$name"
   mkdir -p "$run"
+  # Nothing of an earlier run in this folder may pass for this run's result.
+  rm -f "$run/missing.txt" "$run/stats.json" "$run/trajectory.txt" "$run/evaluate.txt" "$run/evaluate.err"
+  if [ ! -e "$dataset" ]; then
+    ve_info "== $name: $dataset does not exist: not run"
+    echo "$dataset" >"$run/missing.txt"
+    rows+=("| $name | n/a | not run: $dataset does not exist | | | | | | |")
+    continue
+  fi
   ve_info "== $name: $dataset"
+  cut -d ' ' -f 1-3 /proc/loadavg >"$run/load.txt"
   run_rc=0
   "$VE_ROOT/scripts/run_dataset.sh" "$dataset" "$run" "${run_flags[@]}" >"$run/run.log" 2>&1 </dev/null || run_rc=$?
   frames="$(json_get "$run/stats.json" frames)"
@@ -127,3 +145,4 @@ done <"$list"
   echo "|---|---|---|---|---|---|---|---|---|"
   for r in "${rows[@]}"; do echo "$r"; done
 } | tee "$out/results.md"
+ve_suite_info_end "$out"
