@@ -483,6 +483,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       const int why = m.steps[i].ok ? kLossOk : m.steps[i].fail;
       ++counts[why];
       if (m.tracks[i].age == 0) ++young[why];
+      if (why != kLossOk) out.ended.emplace_back(m.tracks[i].id, kLossNames[why]);
     }
     for (int k = 1; k < kLossReasons; ++k) {
       if (counts[k] > 0) out.lost_by[kLossNames[k]] = counts[k];

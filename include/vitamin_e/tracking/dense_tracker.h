@@ -24,6 +24,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -125,6 +126,10 @@ struct TrackerFrame {
   // "duplicate" (two tracks on a pixel).
   std::map<std::string, int> lost_by;
   std::map<std::string, int> lost_new_by;  // the part of lost_by that was detected in the previous frame
+  // Every ended track: its id and the lost_by name of the check that ended it
+  // (a static string), so that the losses of mapped tracks can be told apart
+  // from the churn of young ones.
+  std::vector<std::pair<std::uint64_t, const char*>> ended;
   double noise_ratio = 0;            // estimated image noise sigma / median |gradient| of this frame
   double smoothing_sigma = 0;        // pre-smoothing used for this frame [px]
   double curvature_scale = 0;        // median |kappa| of this frame (the unit of the normalized curvature)
