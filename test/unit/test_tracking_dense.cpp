@@ -220,7 +220,9 @@ TEST(DenseTracker, TracksWarpedPatternEndToEnd) {
   EXPECT_GT(std::count_if(err.begin(), err.end(), [](double e) { return e < 1.0; }), 0.95 * err.size());
   // Dropped tracks disappear.
   std::vector<std::uint64_t> drop{f1.points[0].id, f1.points[1].id};
-  tracker.dropTracks(drop);
+  // Repeated and unknown ids do not count.
+  EXPECT_EQ(tracker.dropTracks({drop[0], drop[1], drop[0], 0xFFFFFFFFFFull}), 2u);
+  EXPECT_EQ(tracker.dropTracks(drop), 0u);
   const auto f2 = tracker.track(renderBlobs(blobs, w, h, R, tt), 0.1);
   for (const auto& p : f2.points) EXPECT_TRUE(p.id != drop[0] && p.id != drop[1]);
 }

@@ -152,7 +152,8 @@ class DenseTracker {
   TrackerFrame track(const cv::Mat& gray, double timestamp);
   // The back end removes outlier tracks: they are not tracked further and their
   // cells are refilled with new points on the next frame. Unknown ids are ignored.
-  void dropTracks(const std::vector<std::uint64_t>& ids);
+  // Returns the number of tracks removed.
+  std::size_t dropTracks(const std::vector<std::uint64_t>& ids);
   // Forgets all points and the previous frame; ids keep increasing.
   void reset();
   // New tracks get ids >= first_id from now on (ids never decrease): tracks
