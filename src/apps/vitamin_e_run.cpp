@@ -83,7 +83,8 @@ const char* kUsage =
     "  kf=0|1 kf_par=PX keyframe inserted; rotation-compensated median parallax to the last keyframe [px]\n"
     "  tri=N(reason:N,...)  new map points made (and refused, by check) at the keyframe\n"
     "  cand=N/N2 cand_par=DEG kfs=K  unmapped tracks seen by an older keyframe (N2: by two or more),\n"
-    "                   the median angle of their rays since the oldest such keyframe, keyframes\n"
+    "                   the median angle of their rays since the first keyframe after their detection,\n"
+    "                   keyframes in the window\n"
     "  reloc=OUTCOME:I/M  relocalization tried: relocalized, not_found or did_not_hold, P3P inliers\n"
     "                   of M descriptor matches (only on relocalizing frames)\n";
 

@@ -55,6 +55,7 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
     t.uv = p.uv;
     t.intensity = p.intensity;
     t.polarity = p.curvature >= 0.f ? 1 : -1;
+    t.age = p.age;
     if (!camera_.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
     f.tracks.push_back(t);
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <unordered_set>
 
 #include "vitamin_e/common/timing.h"
@@ -183,29 +184,34 @@ TriangulationBacklog Mapper::backlog(const FrameContext& frame, const Eigen::Iso
                                      const map::Map& map) const {
   TriangulationBacklog b;
   const auto& kfs = map.keyframes();
+  if (kfs.empty()) return b;
   const Eigen::Matrix3d R_w_c = T_w_c.rotation();
   std::vector<double> parallax;
   for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
     if (frame.landmarks[i]) continue;
     const FrameTrack& t = frame.tracks[i];
-    int seen = 0;
-    const map::Keyframe* oldest = nullptr;
+    // A keyframe takes every track of its frame, so a track is seen by the
+    // keyframes from its detection on: start at the first keyframe not older
+    // than that (they are ordered by frame) instead of asking every keyframe.
+    // (Observations a track inherited with a reused map point, Map::relabelLandmark,
+    // sit in older keyframes and are not counted: this is the track's own parallax.)
+    const std::uint64_t born = frame.frame_index - std::min<std::uint64_t>(t.age, frame.frame_index);
+    auto k = std::lower_bound(kfs.begin(), kfs.end(), born,
+                              [](const map::Keyframe& kf, std::uint64_t f) { return kf.frame_index < f; });
     const Eigen::Vector2d* oldest_xy = nullptr;
-    for (const map::Keyframe& kf : kfs) {
-      auto it = kf.observations.find(t.id);
-      if (it == kf.observations.end()) continue;
-      if (!oldest) {
-        oldest = &kf;
-        oldest_xy = &it->second;
-      }
-      ++seen;
+    for (; k != kfs.end() && k->frame_index < frame.frame_index; ++k) {
+      auto it = k->observations.find(t.id);
+      if (it == k->observations.end()) continue;
+      oldest_xy = &it->second;
+      break;
     }
-    if (!oldest || oldest->frame_index == frame.frame_index) continue;  // born in this frame's keyframe
+    if (!oldest_xy) continue;  // born after the last keyframe older than this frame
     ++b.candidates;
-    if (seen >= 2) ++b.seen_twice;
+    const auto later = std::next(k);
+    if (later != kfs.end() && kfs.back().observations.count(t.id)) ++b.seen_twice;
     // The angle between the two viewing rays in the world frame is the
     // parallax the point would be triangulated with now (no depth needed).
-    const Eigen::Vector3d a = oldest->T_w_c.rotation() * oldest_xy->homogeneous();
+    const Eigen::Vector3d a = k->T_w_c.rotation() * oldest_xy->homogeneous();
     const Eigen::Vector3d c = R_w_c * t.xy.homogeneous();
     parallax.push_back(std::atan2(a.cross(c).norm(), a.dot(c)) * 180.0 / M_PI);
   }

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <unordered_set>
 
 #include "system_impl.h"
 
@@ -68,7 +67,8 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   d.tracks_lost = f.tracks_lost;
   d.tracks_dropped = f.tracks_dropped;
   d.lost_by = std::move(f.lost_by);
-  EndedTracks ended(f.ended.begin(), f.ended.end());
+  EndedTracks ended = std::move(f.ended);
+  std::sort(ended.begin(), ended.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   FrameContext frame = contextOf(std::move(f));
 
   const auto t_start = TimingClock::now();
@@ -83,12 +83,16 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   result.points.reserve(frame.tracks.size());
   std::size_t mapped = 0;
   prev_mapped_ids.clear();
-  for (const FrameTrack& t : frame.tracks) {
+  frame.landmarks.resize(frame.tracks.size());
+  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
+    const FrameTrack& t = frame.tracks[i];
     FramePoint p;
     p.track_id = t.id;
     p.uv = t.uv;
     p.intensity = t.intensity;
-    if (const map::Landmark* l = map.landmark(t.id)) {
+    const map::Landmark* l = map.landmark(t.id);
+    frame.landmarks[i] = l;  // the frame's lookup, as the map is now
+    if (l) {
       p.has_position = true;
       p.p_w = l->p_w;
       ++mapped;
@@ -96,9 +100,11 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
     }
     result.points.push_back(p);
   }
+  if (!std::is_sorted(prev_mapped_ids.begin(), prev_mapped_ids.end())) {
+    std::sort(prev_mapped_ids.begin(), prev_mapped_ids.end());
+  }
   d.keyframes = map.keyframes().size();
   if (result.pose_valid) {
-    frame.lookup(map);
     const TriangulationBacklog b = mapper.backlog(frame, result.T_w_c, map);
     d.candidates = b.candidates;
     d.candidates_two_keyframes = b.seen_twice;
@@ -366,18 +372,24 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
 
 void System::Impl::diagnosePreviousMapPoints(const FrameContext& frame, const EndedTracks& ended,
                                              const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d) const {
-  std::unordered_set<std::uint64_t> now;
+  // Both id lists sorted and walked together: cheaper than hashing the
+  // thousands of tracks of every frame (the tracker keeps its tracks in id order).
+  std::vector<std::uint64_t> now;
   now.reserve(frame.tracks.size());
-  for (const FrameTrack& t : frame.tracks) now.insert(t.id);
+  for (const FrameTrack& t : frame.tracks) now.push_back(t.id);
+  if (!std::is_sorted(now.begin(), now.end())) std::sort(now.begin(), now.end());
   const Eigen::Isometry3d T_c_w = T_w_c.inverse();
   d->prev_map_points = prev_mapped_ids.size();
+  auto n = now.begin();
   for (std::uint64_t id : prev_mapped_ids) {
-    if (now.count(id)) {
+    while (n != now.end() && *n < id) ++n;
+    if (n != now.end() && *n == id) {
       ++d->prev_map_tracked;
       continue;
     }
-    auto e = ended.find(id);
-    ++d->prev_map_lost_by[e == ended.end() ? "dropped" : e->second];
+    auto e = std::lower_bound(ended.begin(), ended.end(), id,
+                              [](const EndedTracks::value_type& a, std::uint64_t b) { return a.first < b; });
+    ++d->prev_map_lost_by[e != ended.end() && e->first == id ? e->second : "dropped"];
     const map::Landmark* l = map.landmark(id);
     if (!l) continue;  // removed as an outlier meanwhile
     const Eigen::Vector3d p_c = T_c_w * l->p_w;

@@ -5,7 +5,7 @@
 // FrameContext from stage to stage.
 #include <cstdint>
 #include <mutex>
-#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "vitamin_e/map/map.h"
@@ -30,8 +30,9 @@ struct RunCounters {
   int relocalizations = 0;                  // losses recovered in the existing map
 };
 
-// The tracks the front end ended at this frame, with the check that ended them.
-using EndedTracks = std::unordered_map<std::uint64_t, const char*>;
+// The tracks the front end ended at this frame, with the check that ended
+// them (a static string), sorted by id.
+using EndedTracks = std::vector<std::pair<std::uint64_t, const char*>>;
 
 struct System::Impl {
   Impl(const SystemConfig& config, const camera::Camera& camera);

@@ -56,12 +56,12 @@ struct FrameDiagnostics {
   int triangulated = 0;                 // new map points made this frame
   std::map<std::string, int> triangulation_rejected_by;  // tried but refused: "parallax", "reprojection",
                                                          // "cheirality", "other"
-  // The candidates: unmapped tracks seen by a keyframe older than this frame,
-  // waiting for the parallax that triangulates them.
+  // The candidates: unmapped tracks seen by a keyframe older than this frame
+  // (since the track was detected), waiting for the parallax that triangulates them.
   std::size_t candidates = 0;
   std::size_t candidates_two_keyframes = 0;  // of them seen by two or more keyframes (tried at each keyframe)
-  double candidate_parallax_deg = 0.0;  // median angle between a candidate's ray in the oldest keyframe that
-                                        // saw it and its ray in this frame (world frame): its parallax now
+  double candidate_parallax_deg = 0.0;  // median angle between a candidate's ray in the first keyframe after
+                                        // its detection and its ray in this frame (world frame): its parallax now
   // relocalization (a frame of kRelocalizing): "" not tried, "relocalized", "not_found" (no pose from
   // the index), "did_not_hold" (a pose found, not confirmed by the map points around it)
   std::string relocalization;

@@ -37,12 +37,12 @@ struct KeyframeUpdate {
   std::vector<std::uint64_t> removed;   // landmarks removed as outliers (their tracks must end)
 };
 
-// The unmapped tracks of a frame that a keyframe older than the frame saw:
-// the points waiting for triangulation.
+// The unmapped tracks of a frame that a keyframe older than the frame saw
+// since the track was detected: the points waiting for triangulation.
 struct TriangulationBacklog {
   std::size_t candidates = 0;
-  std::size_t seen_twice = 0;       // of them seen by two or more keyframes
-  double median_parallax_deg = 0.0; // of the angle between the ray of the oldest keyframe seeing it and the frame's
+  std::size_t seen_twice = 0;       // of them also seen by the newest keyframe (two or more keyframes)
+  double median_parallax_deg = 0.0; // of the angle between the ray of the first keyframe seeing it and the frame's
 };
 
 class Mapper {

@@ -18,6 +18,7 @@ struct FrameTrack {
   Eigen::Vector2d xy;      // normalized undistorted
   std::uint8_t intensity;
   std::int8_t polarity;    // sign of the image curvature at the extremum (+1 / -1)
+  int age = 0;             // frames tracked before this one (0: detected in this frame)
 };
 
 // The output of the tracking stage, the input of the mapping stage.
