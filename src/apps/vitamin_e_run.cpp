@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <string>
 
@@ -56,7 +57,8 @@ const char* kUsage =
     "  --quiet          no progress and no summary\n"
     "  --pipelined      tracking and mapping on two threads (frame k+1 is tracked while k is mapped);\n"
     "                   default: sequential, deterministic\n"
-    "  --log-frames     print one line per frame on stdout: index, time, state, tracks, mapped, ms, message\n"
+    "  --log-frames     print one line per frame on stdout: index, time, state, tracks, mapped, ms,\n"
+    "                   the frame's counters (see below), message\n"
     "  --print-config   print every SLAM parameter in force (defaults + --config), as a config file, and exit\n"
     "  --print-config-markdown  print the configuration reference (docs/CONFIG.md: every key, its\n"
     "                   default and meaning) and exit\n"
@@ -70,7 +72,21 @@ const char* kUsage =
     "  --save-map FILE  write the map at the end (also after SIGINT), atomically; may be --load-map's\n"
     "  --load-tsdf FILE start the dense reconstruction from this TSDF (a --save-tsdf file of a run in\n"
     "                   the same map): the mesh of the mapped place is there from the start\n"
-    "  --save-tsdf FILE write the TSDF voxel blocks at the end\n";
+    "  --save-tsdf FILE write the TSDF voxel blocks at the end\n"
+    "counters of --log-frames (pipeline::FrameDiagnostics; summarized in stats.json frame_diagnostics):\n"
+    "  born=N lost=N(reason:N,...) dropped=N  tracks detected / ended by the tracker (by its check) /\n"
+    "                   ended by the back end (outliers) this frame\n"
+    "  prev_map=T/P left=L in_view=V(reason:N,...)  of the P map points of the previous frame T are\n"
+    "                   still tracked; of the ended ones L project outside the image at this pose, V\n"
+    "                   inside; all ended ones by the tracker's check (dropped: by the back end)\n"
+    "  pose=I/N reuse=R P3P inliers of N map points; map points taken over by new tracks\n"
+    "  kf=0|1 kf_par=PX keyframe inserted; rotation-compensated median parallax to the last keyframe [px]\n"
+    "  tri=N(reason:N,...)  new map points made (and refused, by check) at the keyframe\n"
+    "  cand=N/N2 cand_par=DEG kfs=K  unmapped tracks seen by an older keyframe (N2: by two or more),\n"
+    "                   the median angle of their rays since the first keyframe after their detection,\n"
+    "                   keyframes in the window\n"
+    "  reloc=OUTCOME:I/M  relocalization tried: relocalized, not_found or did_not_hold, P3P inliers\n"
+    "                   of M descriptor matches (only on relocalizing frames)\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 extern "C" void onSignal(int) { g_stop = 1; }
@@ -85,6 +101,63 @@ void installSignalHandlers() {
 }
 
 using vitamin_e::cli::fail;
+
+std::string formatCounts(const std::map<std::string, int>& counts) {
+  std::string out;
+  for (const auto& [k, n] : counts) out += (out.empty() ? "" : ",") + k + ":" + std::to_string(n);
+  return out;
+}
+
+// One frame's FrameDiagnostics as the key=value tokens of --log-frames (see kUsage).
+std::string formatDiagnostics(const pl::FrameDiagnostics& d) {
+  char buf[640];
+  std::snprintf(buf, sizeof(buf),
+                "born=%d lost=%d(%s) dropped=%d prev_map=%zu/%zu left=%zu in_view=%zu(%s) pose=%d/%d reuse=%d kf=%d "
+                "kf_par=%.1f tri=%d(%s) cand=%zu/%zu cand_par=%.2f kfs=%zu",
+                d.tracks_born, d.tracks_lost, formatCounts(d.lost_by).c_str(), d.tracks_dropped, d.prev_map_tracked,
+                d.prev_map_points, d.prev_map_left_view, d.prev_map_lost_in_view,
+                formatCounts(d.prev_map_lost_by).c_str(), d.pose_inliers, d.pose_points, d.reused, d.keyframe ? 1 : 0, d.keyframe_parallax_px, d.triangulated,
+                formatCounts(d.triangulation_rejected_by).c_str(), d.candidates, d.candidates_two_keyframes,
+                d.candidate_parallax_deg, d.keyframes);
+  std::string out = buf;
+  if (!d.relocalization.empty()) {
+    out += " reloc=" + d.relocalization + ":" + std::to_string(d.relocalization_inliers) + "/" +
+           std::to_string(d.relocalization_matches);
+  }
+  return out;
+}
+
+// The per-frame counters summarized in stats.json (frame_diagnostics).
+void addCounters(const pl::FrameResult& r, io::RunStats* stats) {
+  const pl::FrameDiagnostics& d = r.diagnostics;
+  stats->addCounter("tracks_born", d.tracks_born);
+  stats->addCounter("tracks_lost", d.tracks_lost);
+  for (const auto& [why, n] : d.lost_by) stats->addCounter("tracks_lost_by_" + why, n);
+  stats->addCounter("tracks_dropped", d.tracks_dropped);
+  if (d.prev_map_points > 0) {
+    stats->addCounter("prev_map_tracked_fraction", d.prevMapTrackedFraction());
+    stats->addCounter("prev_map_left_view", static_cast<double>(d.prev_map_left_view));
+    stats->addCounter("prev_map_lost_in_view", static_cast<double>(d.prev_map_lost_in_view));
+    for (const auto& [why, n] : d.prev_map_lost_by) stats->addCounter("prev_map_lost_by_" + why, n);
+  }
+  if (d.pose_points > 0) {
+    stats->addCounter("pose_points", d.pose_points);
+    stats->addCounter("pose_inliers", d.pose_inliers);
+  }
+  if (r.pose_valid) {
+    stats->addCounter("mapped_tracks", static_cast<double>(r.num_mapped));
+    stats->addCounter("reused", d.reused);
+    stats->addCounter("keyframe", d.keyframe ? 1.0 : 0.0);
+    stats->addCounter("candidates", static_cast<double>(d.candidates));
+    stats->addCounter("candidate_parallax_deg", d.candidate_parallax_deg);
+  }
+  stats->addCounter("triangulated", d.triangulated);
+  for (const auto& [why, n] : d.triangulation_rejected_by) stats->addCounter("triangulation_rejected_by_" + why, n);
+  if (!d.relocalization.empty()) {
+    stats->addCounter("relocalization_attempts", 1.0);
+    stats->addCounter("relocalization_succeeded", d.relocalization == "relocalized" ? 1.0 : 0.0);
+  }
+}
 
 struct Options {
   std::string dataset, out, config, calib, topic = "/cam0/image_raw";
@@ -324,9 +397,11 @@ int run(const Options& o) {
     std::vector<std::pair<std::string, double>> stages(r.timing_ms.begin(), r.timing_ms.end());
     const double total_ms = r.timing_ms.count("total") ? r.timing_ms.at("total") : 0.0;
     if (o.log_frames) {
-      std::printf("%llu %.9f %s %zu %zu %.1f %s\n", static_cast<unsigned long long>(r.frame_index), r.timestamp,
-                  pl::toString(r.state), r.num_tracked, r.num_mapped, total_ms, r.message.c_str());
+      std::printf("%llu %.9f %s %zu %zu %.1f %s %s\n", static_cast<unsigned long long>(r.frame_index), r.timestamp,
+                  pl::toString(r.state), r.num_tracked, r.num_mapped, total_ms,
+                  formatDiagnostics(r.diagnostics).c_str(), r.message.c_str());
     }
+    addCounters(r, &stats);
     if (dense) {
       // Per-frame mesh + NLTGV here; TSDF fusion runs on the mapper's own thread.
       pl::framePointsInCamera(r, &dense_ids, &dense_points);

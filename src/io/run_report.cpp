@@ -97,6 +97,20 @@ std::string toJson(const RunStats& s) {
   os << "  \"map_points\": " << s.map_points << ",\n";
   os << "  \"points_per_frame\": " << meanMedian(s.points_per_frame) << ",\n";
   os << "  \"mapped_points_per_frame\": " << meanMedian(s.mapped_points_per_frame) << ",\n";
+  os << "  \"frame_diagnostics\": {";
+  {
+    bool first = true;
+    for (const auto& [name, v] : s.frame_counters) {
+      if (v.empty()) continue;
+      os << (first ? "" : ",") << "\n    " << jsonString(name) << ": {\"mean\": " << number(mean(v))
+         << ", \"median\": " << number(percentile(v, 50.0)) << ", \"min\": "
+         << number(*std::min_element(v.begin(), v.end())) << ", \"max\": "
+         << number(*std::max_element(v.begin(), v.end())) << ", \"sum\": "
+         << number(std::accumulate(v.begin(), v.end(), 0.0)) << "}";
+      first = false;
+    }
+    os << (first ? "" : "\n  ") << "},\n";
+  }
   os << "  \"timing_ms\": {";
   const std::vector<std::string> stages = reportStages(s.timing);
   for (std::size_t i = 0; i < stages.size(); ++i) {

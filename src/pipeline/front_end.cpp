@@ -44,7 +44,7 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
       std::lock_guard<std::mutex> lock(drops_mutex_);
       drops.swap(pending_drops_);
     }
-    if (!drops.empty()) tracker_.dropTracks(drops);
+    if (!drops.empty()) f.tracks_dropped = static_cast<int>(tracker_.dropTracks(drops));
   }
   const auto t0 = std::chrono::steady_clock::now();
   tracking::TrackerFrame tf = tracker_.track(image, timestamp);
@@ -55,9 +55,14 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
     t.uv = p.uv;
     t.intensity = p.intensity;
     t.polarity = p.curvature >= 0.f ? 1 : -1;
+    t.age = p.age;
     if (!camera_.unprojectNormalized(p.uv.cast<double>(), &t.xy)) continue;
     f.tracks.push_back(t);
   }
+  f.tracks_born = tf.num_new;
+  f.tracks_lost = tf.num_lost;
+  f.lost_by = std::move(tf.lost_by);
+  f.ended = std::move(tf.ended);
   f.tracking_ms = elapsedMs(t0);
   return f;
 }

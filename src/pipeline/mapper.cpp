@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <unordered_set>
 
 #include "vitamin_e/common/timing.h"
@@ -146,8 +147,11 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
   return out;
 }
 
-bool Mapper::needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const {
-  if (map.keyframes().empty()) return true;
+KeyframeDecision Mapper::needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
+                                      const map::Map& map) const {
+  KeyframeDecision d;
+  d.needed = true;
+  if (map.keyframes().empty()) return d;
   const map::Keyframe& kf = map.keyframes().back();
   const Eigen::Matrix3d R_cur_kf = (T_w_c.inverse() * kf.T_w_c).rotation();
   std::vector<double> parallax;
@@ -162,10 +166,51 @@ bool Mapper::needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_
     parallax.push_back((f.hnormalized() - t.xy).norm() * camera_.fx());
   }
   const double med = upperMedian(parallax);
-  if (med >= config_.keyframe_parallax_px) return true;
+  d.parallax_px = med;
+  if (med >= config_.keyframe_parallax_px) return d;
   const double mapped_ratio =
       frame.tracks.empty() ? 0.0 : static_cast<double>(mapped) / static_cast<double>(frame.tracks.size());
-  return mapped_ratio < config_.keyframe_min_mapped_ratio && med >= 0.3 * config_.keyframe_parallax_px;
+  d.needed = mapped_ratio < config_.keyframe_min_mapped_ratio && med >= 0.3 * config_.keyframe_parallax_px;
+  return d;
+}
+
+TriangulationBacklog Mapper::backlog(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
+                                     const map::Map& map) const {
+  TriangulationBacklog b;
+  const auto& kfs = map.keyframes();
+  if (kfs.empty()) return b;
+  const Eigen::Matrix3d R_w_c = T_w_c.rotation();
+  std::vector<double> parallax;
+  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
+    if (frame.landmarks[i]) continue;
+    const FrameTrack& t = frame.tracks[i];
+    // A keyframe takes every track of its frame, so a track is seen by the
+    // keyframes from its detection on: start at the first keyframe not older
+    // than that (they are ordered by frame) instead of asking every keyframe.
+    // (Observations a track inherited with a reused map point, Map::relabelLandmark,
+    // sit in older keyframes and are not counted: this is the track's own parallax.)
+    const std::uint64_t born = frame.frame_index - std::min<std::uint64_t>(t.age, frame.frame_index);
+    auto k = std::lower_bound(kfs.begin(), kfs.end(), born,
+                              [](const map::Keyframe& kf, std::uint64_t f) { return kf.frame_index < f; });
+    const Eigen::Vector2d* oldest_xy = nullptr;
+    for (; k != kfs.end() && k->frame_index < frame.frame_index; ++k) {
+      auto it = k->observations.find(t.id);
+      if (it == k->observations.end()) continue;
+      oldest_xy = &it->second;
+      break;
+    }
+    if (!oldest_xy) continue;  // born after the last keyframe older than this frame
+    ++b.candidates;
+    const auto later = std::next(k);
+    if (later != kfs.end() && kfs.back().observations.count(t.id)) ++b.seen_twice;
+    // The angle between the two viewing rays in the world frame is the
+    // parallax the point would be triangulated with now (no depth needed).
+    const Eigen::Vector3d a = k->T_w_c.rotation() * oldest_xy->homogeneous();
+    const Eigen::Vector3d c = R_w_c * t.xy.homogeneous();
+    parallax.push_back(std::atan2(a.cross(c).norm(), a.dot(c)) * 180.0 / M_PI);
+  }
+  b.median_parallax_deg = parallax.empty() ? 0.0 : upperMedian(parallax);
+  return b;
 }
 
 KeyframeUpdate Mapper::addKeyframe(FrameContext* frame, const Eigen::Isometry3d& T_w_c, map::Map* map) const {
@@ -176,7 +221,7 @@ KeyframeUpdate Mapper::addKeyframe(FrameContext* frame, const Eigen::Isometry3d&
   for (const FrameTrack& t : frame->tracks) kf.observations.emplace(t.id, t.xy);
   map->addKeyframe(std::move(kf));
   KeyframeUpdate out;
-  out.triangulated = triangulate(*frame, map);
+  out.triangulated = triangulate(*frame, map, &out.rejected_by);
   frame->lookup(*map);
   out.removed = optimizeWindow(map);
   if (!out.removed.empty()) frame->lookup(*map);
@@ -184,7 +229,7 @@ KeyframeUpdate Mapper::addKeyframe(FrameContext* frame, const Eigen::Isometry3d&
   return out;
 }
 
-int Mapper::triangulate(const FrameContext& frame, map::Map* map) const {
+int Mapper::triangulate(const FrameContext& frame, map::Map* map, std::map<std::string, int>* rejected_by) const {
   const auto& kfs = map->keyframes();
   int created = 0;
   std::vector<Eigen::Isometry3d> poses;
@@ -202,7 +247,15 @@ int Mapper::triangulate(const FrameContext& frame, map::Map* map) const {
     }
     if (poses.size() < 2) continue;
     geometry::TriangulationResult tr = geometry::triangulatePoint(poses, obs, config_.triangulation);
-    if (!tr.ok) continue;
+    if (!tr.ok) {
+      // The checks of triangulatePoint, in its order (no errors: the linear solution failed).
+      const char* why = tr.reproj_error_px.empty()                                 ? "other"
+                        : !tr.cheirality_ok                                        ? "cheirality"
+                        : tr.parallax_deg < config_.triangulation.min_parallax_deg ? "parallax"
+                                                                                   : "reprojection";
+      ++(*rejected_by)[why];
+      continue;
+    }
     map::NewLandmark l;
     l.id = t.id;
     l.p_w = tr.p_w;

@@ -62,11 +62,18 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   }
   result.timing_ms["tracking"] = f.tracking_ms;
   const double tracking_ms = f.tracking_ms;
+  FrameDiagnostics& d = result.diagnostics;
+  d.tracks_born = f.tracks_born;
+  d.tracks_lost = f.tracks_lost;
+  d.tracks_dropped = f.tracks_dropped;
+  d.lost_by = std::move(f.lost_by);
+  EndedTracks ended = std::move(f.ended);
+  std::sort(ended.begin(), ended.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   FrameContext frame = contextOf(std::move(f));
 
   const auto t_start = TimingClock::now();
   if (state == TrackingState::kTracking) {
-    track(frame, &result);
+    track(frame, ended, &result);
   } else if (state == TrackingState::kRelocalizing) {
     relocalize(frame, &result);
   } else {
@@ -75,17 +82,33 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   if (state == TrackingState::kTracking && !result.pose_valid) result.state = TrackingState::kLost;
   result.points.reserve(frame.tracks.size());
   std::size_t mapped = 0;
-  for (const FrameTrack& t : frame.tracks) {
+  prev_mapped_ids.clear();
+  frame.landmarks.resize(frame.tracks.size());
+  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
+    const FrameTrack& t = frame.tracks[i];
     FramePoint p;
     p.track_id = t.id;
     p.uv = t.uv;
     p.intensity = t.intensity;
-    if (const map::Landmark* l = map.landmark(t.id)) {
+    const map::Landmark* l = map.landmark(t.id);
+    frame.landmarks[i] = l;  // the frame's lookup, as the map is now
+    if (l) {
       p.has_position = true;
       p.p_w = l->p_w;
       ++mapped;
+      if (result.pose_valid) prev_mapped_ids.push_back(t.id);
     }
     result.points.push_back(p);
+  }
+  if (!std::is_sorted(prev_mapped_ids.begin(), prev_mapped_ids.end())) {
+    std::sort(prev_mapped_ids.begin(), prev_mapped_ids.end());
+  }
+  d.keyframes = map.keyframes().size();
+  if (result.pose_valid) {
+    const TriangulationBacklog b = mapper.backlog(frame, result.T_w_c, map);
+    d.candidates = b.candidates;
+    d.candidates_two_keyframes = b.seen_twice;
+    d.candidate_parallax_deg = b.median_parallax_deg;
   }
   result.num_mapped = mapped;
   result.num_tracked = frame.tracks.size();
@@ -138,6 +161,8 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
     return;
   }
   InitialMap& m = attempt.map;
+  result->diagnostics.keyframe = true;
+  result->diagnostics.triangulated = static_cast<int>(m.landmarks.size());
   map.clear();
   for (const map::NewLandmark& l : m.landmarks) map.addLandmark(l);
   map.addKeyframe(std::move(m.reference));
@@ -202,7 +227,12 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
   ScopedTimer timer(&timings, "relocalize");
   result->state = TrackingState::kRelocalizing;
   const Relocalization r = relocalizer.relocalize(frame.image, frame, map);
+  FrameDiagnostics& d = result->diagnostics;
+  d.relocalization_matches = r.matches;
+  d.relocalization_inliers = r.inliers;
+  d.relocalization = r.ok ? "did_not_hold" : "not_found";
   if (r.ok && resume(frame, r.T_w_c, result)) {
+    d.relocalization = "relocalized";
     ++counters.relocalizations;
     result->message = "relocalized against keyframe " + std::to_string(r.keyframe) + " (" +
                       std::to_string(r.inliers) + " of " + std::to_string(r.matches) + " matches" +
@@ -224,14 +254,17 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
 // frame's tracks around it, the pose is estimated and refined with them, and
 // the frame becomes a keyframe so that new points are triangulated from it.
 bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result) {
+  FrameDiagnostics& d = result->diagnostics;
   frame.lookup(map);
-  reuse.associate(frame, T_w_guess, scene_depth, &map, true);
+  d.reused = reuse.associate(frame, T_w_guess, scene_depth, &map, true);
   frame.lookup(map);
   const PoseEstimate pose = localizer.estimate(frame, T_w_guess);
+  d.pose_points = pose.num_points;
+  d.pose_inliers = pose.num_inliers;
   if (!pose.ok) return false;
   endTracks(mapper.penalize(pose.outliers, &map), frame);
   Eigen::Isometry3d T_w_c = pose.T_w_c;
-  reuse.associate(frame, T_w_c, scene_depth, &map, true);
+  d.reused += reuse.associate(frame, T_w_c, scene_depth, &map, true);
   frame.lookup(map);
   const FrameRefinement refined = mapper.refineFrame(frame, &T_w_c, &map);
   endTracks(refined.removed, frame);
@@ -245,6 +278,9 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
   motion.restart(T_w_c, Eigen::Isometry3d::Identity());
   if (!localization_only) {
     const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
+    d.keyframe = true;
+    d.triangulated = kf.triangulated;
+    d.triangulation_rejected_by = kf.rejected_by;
     front_end.dropTracks(kf.removed);
     T_w_c = kf.T_w_c;
     motion.correctLast(T_w_c);
@@ -258,7 +294,8 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
   return true;
 }
 
-void System::Impl::track(FrameContext& frame, FrameResult* result) {
+void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameResult* result) {
+  FrameDiagnostics& d = result->diagnostics;
   frame.lookup(map);
   for (const map::Landmark* l : frame.landmarks) {
     if (l) map.markSeen(l->id, frame.frame_index);
@@ -269,6 +306,11 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
     // Accepted only when well constrained (enough inliers, and most of the
     // tracked map points agree): however many tracks a turn or a cut ended.
     const PoseEstimate pose = localizer.estimate(frame, motion.predict(), &motion.lastPose());
+    d.pose_points = pose.num_points;
+    d.pose_inliers = pose.num_inliers;
+    // Where the ended map tracks went: judged at the new pose, or at the
+    // motion model's prediction when there is none.
+    diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : motion.predict(), &d);
     if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
     if (pose.weak_kept) {
       result->message = "weak pose kept: " + std::to_string(pose.num_inliers) + " of " +
@@ -282,7 +324,8 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
     // Localized: new tracks where old map points project take them over.
     ScopedTimer reuse_timer(&timings, "reuse", &result->timing_ms);
     T_w_c = pose.T_w_c;
-    if (reuse.associate(frame, T_w_c, scene_depth, &map) > 0) frame.lookup(map);
+    d.reused = reuse.associate(frame, T_w_c, scene_depth, &map);
+    if (d.reused > 0) frame.lookup(map);
   }
   {
     ScopedTimer timer(&timings, "ba", &result->timing_ms);
@@ -303,8 +346,14 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   motion.update(T_w_c);
   {
     ScopedTimer timer(&timings, "map", &result->timing_ms);
-    if (!localization_only && mapper.needKeyframe(frame, T_w_c, map)) {
+    const KeyframeDecision decision =
+        localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
+    d.keyframe_parallax_px = decision.parallax_px;
+    if (decision.needed) {
       const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
+      d.keyframe = true;
+      d.triangulated = kf.triangulated;
+      d.triangulation_rejected_by = kf.rejected_by;
       front_end.dropTracks(kf.removed);
       T_w_c = kf.T_w_c;
       motion.correctLast(T_w_c);
@@ -325,8 +374,39 @@ void System::Impl::track(FrameContext& frame, FrameResult* result) {
   result->T_w_c = T_w_c;
 }
 
+void System::Impl::diagnosePreviousMapPoints(const FrameContext& frame, const EndedTracks& ended,
+                                             const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d) const {
+  // Both id lists sorted and walked together: cheaper than hashing the
+  // thousands of tracks of every frame (the tracker keeps its tracks in id order).
+  std::vector<std::uint64_t> now;
+  now.reserve(frame.tracks.size());
+  for (const FrameTrack& t : frame.tracks) now.push_back(t.id);
+  if (!std::is_sorted(now.begin(), now.end())) std::sort(now.begin(), now.end());
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+  d->prev_map_points = prev_mapped_ids.size();
+  auto n = now.begin();
+  for (std::uint64_t id : prev_mapped_ids) {
+    while (n != now.end() && *n < id) ++n;
+    if (n != now.end() && *n == id) {
+      ++d->prev_map_tracked;
+      continue;
+    }
+    auto e = std::lower_bound(ended.begin(), ended.end(), id,
+                              [](const EndedTracks::value_type& a, std::uint64_t b) { return a.first < b; });
+    ++d->prev_map_lost_by[e != ended.end() && e->first == id ? e->second : "dropped"];
+    const map::Landmark* l = map.landmark(id);
+    if (!l) continue;  // removed as an outlier meanwhile
+    const Eigen::Vector3d p_c = T_c_w * l->p_w;
+    Eigen::Vector2d uv;
+    // The tracker keeps border_px off the image edge: a point there has left its view.
+    const bool inside = p_c.z() > 0.0 && camera.project(p_c, &uv) && camera.inImage(uv, config.tracker.border_px);
+    ++(inside ? d->prev_map_lost_in_view : d->prev_map_left_view);
+  }
+}
+
 void System::Impl::reset() {
   map_loaded = false;
+  prev_mapped_ids.clear();
   map.clear();
   relocalizer.clear();
   lost_frames = 0;

@@ -3,7 +3,9 @@
 // own state, and what the frames share across them (the map, the motion model,
 // the tracking status, the trajectory). The per-frame data travels in a
 // FrameContext from stage to stage.
+#include <cstdint>
 #include <mutex>
+#include <utility>
 #include <vector>
 
 #include "vitamin_e/map/map.h"
@@ -28,6 +30,10 @@ struct RunCounters {
   int relocalizations = 0;                  // losses recovered in the existing map
 };
 
+// The tracks the front end ended at this frame, with the check that ended
+// them (a static string), sorted by id.
+using EndedTracks = std::vector<std::pair<std::uint64_t, const char*>>;
+
 struct System::Impl {
   Impl(const SystemConfig& config, const camera::Camera& camera);
 
@@ -37,13 +43,17 @@ struct System::Impl {
 
   // The steps of mapFrame (system.cpp).
   void initialize(FrameContext& frame, FrameResult* result);
-  void track(FrameContext& frame, FrameResult* result);
+  void track(FrameContext& frame, const EndedTracks& ended, FrameResult* result);
   void lose(const FrameContext& frame, const std::string& why, bool restart_from_frame, FrameResult* result);
   void reinitialize(const std::string& why, FrameResult* result);
   void relocalize(FrameContext& frame, FrameResult* result);
   bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
+  // Diagnostics: where the previous frame's map points went (still tracked,
+  // ended by reason, out of view or in view at T_w_c).
+  void diagnosePreviousMapPoints(const FrameContext& frame, const EndedTracks& ended, const Eigen::Isometry3d& T_w_c,
+                                 FrameDiagnostics* d) const;
   // A loss is not given up for a new map (system_map_io.cpp).
   bool keepRelocalizing() const;
 
@@ -68,6 +78,7 @@ struct System::Impl {
   bool map_loaded = false;            // the map came from loadMap() (a loss is then never given up)
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
+  std::vector<std::uint64_t> prev_mapped_ids;  // tracks with a map point at the end of the last tracked frame
   // both threads (StageTimings is thread-safe)
   StageTimings timings;
 };

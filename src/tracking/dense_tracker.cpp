@@ -341,14 +341,16 @@ void DenseTracker::reset() {
 
 void DenseTracker::reserveIdsBelow(std::uint64_t first_id) { impl_->next_id = std::max(impl_->next_id, first_id); }
 
-void DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
-  if (ids.empty()) return;
+std::size_t DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
+  if (ids.empty()) return 0;
   std::vector<std::uint64_t> sorted(ids);
   std::sort(sorted.begin(), sorted.end());
   auto& tr = impl_->tracks;
+  const std::size_t before = tr.size();
   tr.erase(std::remove_if(tr.begin(), tr.end(),
                           [&](const Track& t) { return std::binary_search(sorted.begin(), sorted.end(), t.id); }),
            tr.end());
+  return before - tr.size();
 }
 
 TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
@@ -483,6 +485,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       const int why = m.steps[i].ok ? kLossOk : m.steps[i].fail;
       ++counts[why];
       if (m.tracks[i].age == 0) ++young[why];
+      if (why != kLossOk) out.ended.emplace_back(m.tracks[i].id, kLossNames[why]);
     }
     for (int k = 1; k < kLossReasons; ++k) {
       if (counts[k] > 0) out.lost_by[kLossNames[k]] = counts[k];

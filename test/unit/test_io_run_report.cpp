@@ -23,6 +23,10 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   s.tracked_since_init = 1;
   s.reused_map_points = 17;
   s.map_points = 1234;
+  s.addCounter("tracks_born", 10);
+  s.addCounter("tracks_born", 30);
+  s.addCounter("tracks_born", 20);
+  s.addCounter("keyframe", 1);
   s.peak_rss_mb = peakRssMb();
   EXPECT_GT(s.peak_rss_mb, 1.0);
   EXPECT_LT(s.peak_rss_mb, 1e5);
@@ -52,6 +56,13 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   EXPECT_EQ(j["timing_ms"]["total"]["count"].as<int>(), 3);
   EXPECT_DOUBLE_EQ(j["fps"].as<double>(), 1.5);
   EXPECT_GT(j["peak_rss_mb"].as<double>(), 1.0);
+  const YAML::Node born = j["frame_diagnostics"]["tracks_born"];
+  EXPECT_DOUBLE_EQ(born["mean"].as<double>(), 20.0);
+  EXPECT_DOUBLE_EQ(born["median"].as<double>(), 20.0);
+  EXPECT_DOUBLE_EQ(born["min"].as<double>(), 10.0);
+  EXPECT_DOUBLE_EQ(born["max"].as<double>(), 30.0);
+  EXPECT_DOUBLE_EQ(born["sum"].as<double>(), 60.0);
+  EXPECT_DOUBLE_EQ(j["frame_diagnostics"]["keyframe"]["sum"].as<double>(), 1.0);
   // Reports list the system's stages first and "total" last.
   const std::vector<std::string> order = reportStages(s.timing);
   EXPECT_EQ(order, (std::vector<std::string>{"tracking", "ba", "total"}));

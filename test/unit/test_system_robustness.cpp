@@ -350,6 +350,18 @@ TEST(Robustness, BlackoutOfTwoSecondsRelocalizesInTheSameMap) {
   EXPECT_GE(run.system.relocalizations(), 1);
   EXPECT_EQ(run.results.back().relocalizations, run.system.relocalizations());
   EXPECT_NE(run.results[again].message.find("relocalized"), std::string::npos) << run.results[again].message;
+  // The counters tell the attempts apart: the frames after the loss tried and
+  // failed, the frame found again says so with its matches.
+  const ve::pipeline::FrameDiagnostics& found = run.results[again].diagnostics;
+  EXPECT_EQ(found.relocalization, "relocalized");
+  EXPECT_GE(found.relocalization_inliers, 30);
+  EXPECT_LE(found.relocalization_inliers, found.relocalization_matches);
+  EXPECT_TRUE(found.keyframe);  // a relocalized frame becomes a keyframe
+  EXPECT_TRUE(run.results[kBlackBegin - 1].diagnostics.relocalization.empty());
+  for (int i = kBlackBegin + 1; i < again; ++i) {
+    const std::string& outcome = run.results[i].diagnostics.relocalization;
+    EXPECT_TRUE(outcome == "not_found" || outcome == "did_not_hold") << "frame " << i << ": '" << outcome << "'";
+  }
   for (int i = again; i < kBlackoutRunEnd; ++i) {
     EXPECT_TRUE(run.results[i].pose_valid) << "frame " << i << ": " << run.results[i].message;
   }

@@ -296,6 +296,68 @@ TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
   EXPECT_TRUE(readFile(map) == map_bytes);
 }
 
+namespace {
+// The integer after "key=" in a --log-frames line (-1 when absent).
+long tokenValue(const std::string& line, const std::string& key) {
+  const std::size_t at = line.find(" " + key + "=");
+  return at == std::string::npos ? -1 : std::stol(line.substr(at + key.size() + 2));
+}
+}  // namespace
+
+// --log-frames prints the frame's counters (FrameDiagnostics) on every line and
+// stats.json summarizes them: the tracks balance from line to line, and the
+// sums in stats.json are those of the lines.
+TEST_F(RunnerSignal, LogFramesAndStatsCarryTheCounters) {
+  const fs::path out = dir_ / "out_counters";
+  const fs::path log = dir_ / "counters.log";
+  const std::string cmd = runner_.string() + " --dataset " + (dir_ / "seq").string() + " --max-frames 30 --quiet" +
+                          " --log-frames --out " + out.string() + " </dev/null >" + log.string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << readFile(log);
+  std::istringstream lines(readFile(log));
+  long born = 0, lost = 0, dropped = 0, triangulated = 0, keyframes = 0, prev_tracks = -1;
+  int n = 0, with_prev_map = 0;
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream ls(line);
+    long index = 0, tracks = 0, mapped = 0;
+    double stamp = 0.0, ms = 0.0;
+    std::string state;
+    ASSERT_TRUE(static_cast<bool>(ls >> index >> stamp >> state >> tracks >> mapped >> ms)) << line;
+    EXPECT_EQ(index, n) << line;
+    for (const char* key : {"born", "lost", "dropped", "prev_map", "pose", "reuse", "kf", "kf_par", "tri", "cand",
+                            "cand_par", "kfs"}) {
+      EXPECT_GE(tokenValue(line, key), 0) << key << " missing: " << line;
+    }
+    const long b = tokenValue(line, "born"), l = tokenValue(line, "lost"), d = tokenValue(line, "dropped");
+    if (prev_tracks >= 0) EXPECT_EQ(prev_tracks, tracks - b + l + d) << line;
+    prev_tracks = tracks;
+    born += b;
+    lost += l;
+    dropped += d;
+    triangulated += tokenValue(line, "tri");
+    keyframes += tokenValue(line, "kf");
+    with_prev_map += tokenValue(line, "prev_map") > 0 ? 1 : 0;
+    ++n;
+  }
+  ASSERT_EQ(n, 30) << readFile(log);
+  EXPECT_GT(triangulated, 100);
+  EXPECT_GE(keyframes, 2);
+  EXPECT_GT(with_prev_map, 10);
+  const YAML::Node fd = YAML::LoadFile((out / "stats.json").string())["frame_diagnostics"];
+  ASSERT_TRUE(fd.IsMap());
+  EXPECT_EQ(fd["tracks_born"]["sum"].as<long>(), born);
+  EXPECT_EQ(fd["tracks_lost"]["sum"].as<long>(), lost);
+  EXPECT_EQ(fd["tracks_dropped"]["sum"].as<long>(), dropped);
+  EXPECT_EQ(fd["triangulated"]["sum"].as<long>(), triangulated);
+  EXPECT_EQ(fd["keyframe"]["sum"].as<long>(), keyframes);
+  for (const char* key : {"prev_map_tracked_fraction", "mapped_tracks", "candidates", "candidate_parallax_deg",
+                          "pose_inliers"}) {
+    ASSERT_TRUE(fd[key].IsMap()) << key;
+    EXPECT_GE(fd[key]["max"].as<double>(), fd[key]["median"].as<double>()) << key;
+  }
+  EXPECT_LE(fd["prev_map_tracked_fraction"]["max"].as<double>(), 1.0);
+  EXPECT_GT(fd["prev_map_tracked_fraction"]["median"].as<double>(), 0.5);
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -3,6 +3,8 @@
 // against the exact ground truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "vitamin_e/eval/metrics.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/system.h"
@@ -113,6 +115,94 @@ TEST(SystemSynthetic, InitializesAndTracksEveryFrameAfterwards) {
   EXPECT_GT(run.results.back().num_mapped, 1000u);
   // Tracks end and new ones start on the same texture: some take over map points.
   EXPECT_GT(run.reused_map_points, 0u);
+}
+
+// The per-frame counters (FrameDiagnostics) add up: the previous frame's tracks
+// are this frame's old tracks plus the ended ones, every map point of the
+// previous frame is still tracked or ended for a named reason, P3P's inliers are
+// among its points, points are made only at keyframes (and at every keyframe of
+// this translating camera), and the candidates gain parallax between keyframes.
+TEST(SystemSynthetic, FrameDiagnosticsAddUp) {
+  const SyntheticRun& run = firstRun();
+  int keyframes = 0, triangulated = 0, with_candidates = 0, init_frames = 0, dropped = 0;
+  int intervals = 0, grew = 0;  // keyframe intervals, those over which the candidates' parallax grew
+  int interval_frames = 0;  // frames with candidates since the last keyframe
+  double interval_start = 0.0, interval_end = 0.0;
+  std::vector<double> survival;
+  for (std::size_t i = 0; i < run.results.size(); ++i) {
+    const ve::pipeline::FrameResult& r = run.results[i];
+    const ve::pipeline::FrameDiagnostics& d = r.diagnostics;
+    int lost = 0;
+    for (const auto& kv : d.lost_by) lost += kv.second;
+    EXPECT_EQ(lost, d.tracks_lost) << "frame " << i;
+    dropped += d.tracks_dropped;
+    if (i == 0) {
+      EXPECT_EQ(static_cast<std::size_t>(d.tracks_born), r.num_tracked);
+      EXPECT_EQ(d.tracks_lost + d.tracks_dropped, 0);
+    } else {
+      EXPECT_EQ(run.results[i - 1].num_tracked,
+                r.num_tracked - static_cast<std::size_t>(d.tracks_born) + d.tracks_lost + d.tracks_dropped)
+          << "frame " << i;
+    }
+    EXPECT_LE(d.prev_map_tracked, d.prev_map_points) << "frame " << i;
+    std::size_t ended = 0;
+    for (const auto& kv : d.prev_map_lost_by) ended += static_cast<std::size_t>(kv.second);
+    EXPECT_EQ(d.prev_map_tracked + ended, d.prev_map_points) << "frame " << i;
+    EXPECT_LE(d.prev_map_left_view + d.prev_map_lost_in_view, ended) << "frame " << i;
+    EXPECT_LE(d.pose_inliers, d.pose_points) << "frame " << i;
+    EXPECT_LE(d.candidates_two_keyframes, d.candidates) << "frame " << i;
+    EXPECT_GE(d.candidate_parallax_deg, 0.0);
+    EXPECT_LT(d.candidate_parallax_deg, 30.0);
+    EXPECT_TRUE(d.relocalization.empty()) << "frame " << i;  // never lost here
+    if (!d.keyframe) {
+      EXPECT_EQ(d.triangulated, 0) << "frame " << i;
+      EXPECT_TRUE(d.triangulation_rejected_by.empty()) << "frame " << i;
+    }
+    if (r.state == ve::pipeline::TrackingState::kTracking && (i == 0 || !run.results[i - 1].pose_valid)) {
+      // the first map: made from this frame
+      ++init_frames;
+      EXPECT_TRUE(d.keyframe);
+      EXPECT_EQ(d.keyframes, 2u);
+      EXPECT_GT(d.triangulated, 100);
+      EXPECT_EQ(d.prev_map_points, 0u);
+    }
+    if (i > 0 && r.state == ve::pipeline::TrackingState::kTracking && run.results[i - 1].pose_valid) {
+      EXPECT_EQ(d.prev_map_points, run.results[i - 1].num_mapped) << "frame " << i;
+      EXPECT_GE(d.pose_inliers, 30) << "frame " << i;
+      EXPECT_LE(d.keyframes, 10u);
+      EXPECT_GE(d.keyframes, 2u);
+      survival.push_back(d.prevMapTrackedFraction());
+      with_candidates += d.candidates > 0 ? 1 : 0;
+      if (d.keyframe) {
+        ++keyframes;
+        triangulated += d.triangulated;
+        EXPECT_GT(d.triangulated, 0) << "keyframe " << i;
+        EXPECT_GT(d.keyframe_parallax_px, 0.0) << "frame " << i;
+        // The candidates waited since the last keyframe: their parallax on
+        // the frame before this one against the first frame after that keyframe
+        // (at a keyframe the ones triangulated leave the candidates).
+        if (interval_frames >= 2) {
+          ++intervals;
+          grew += interval_end > interval_start ? 1 : 0;
+        }
+        interval_frames = 0;
+      } else if (d.candidates > 0) {
+        if (interval_frames++ == 0) interval_start = d.candidate_parallax_deg;
+        interval_end = d.candidate_parallax_deg;
+      }
+    }
+  }
+  std::printf("keyframes %d, triangulated %d, dropped %d, parallax grew in %d of %d keyframe intervals\n", keyframes,
+              triangulated, dropped, grew, intervals);
+  EXPECT_EQ(init_frames, 1);
+  ASSERT_GT(survival.size(), 50u);
+  std::sort(survival.begin(), survival.end());
+  EXPECT_GT(survival[survival.size() / 2], 0.8);
+  EXPECT_GT(keyframes, 2);
+  EXPECT_GT(triangulated, 100);
+  EXPECT_GT(with_candidates, 10);
+  ASSERT_GE(intervals, 2);
+  EXPECT_GE(grew, intervals - intervals / 5);
 }
 
 TEST(SystemSynthetic, TrajectoryMatchesGroundTruthAfterSim3Alignment) {

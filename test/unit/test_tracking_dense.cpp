@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -219,9 +220,38 @@ TEST(DenseTracker, TracksWarpedPatternEndToEnd) {
   EXPECT_GT(std::count_if(err.begin(), err.end(), [](double e) { return e < 1.0; }), 0.95 * err.size());
   // Dropped tracks disappear.
   std::vector<std::uint64_t> drop{f1.points[0].id, f1.points[1].id};
-  tracker.dropTracks(drop);
+  // Repeated and unknown ids do not count.
+  EXPECT_EQ(tracker.dropTracks({drop[0], drop[1], drop[0], 0xFFFFFFFFFFull}), 2u);
+  EXPECT_EQ(tracker.dropTracks(drop), 0u);
   const auto f2 = tracker.track(renderBlobs(blobs, w, h, R, tt), 0.1);
   for (const auto& p : f2.points) EXPECT_TRUE(p.id != drop[0] && p.id != drop[1]);
+}
+
+// Every ended track is listed once with the check that ended it, in agreement
+// with lost_by, and none of them is among the live points.
+TEST(DenseTracker, EndedTracksNameTheirReason) {
+  const int w = 320, h = 240;
+  const auto blobs = randomBlobs(700, w, h, 5);
+  vt::TrackerConfig cfg;
+  cfg.brief_scale = 1.0 / 3.0;
+  cfg.brief_patch_size = 11;
+  vt::DenseTracker tracker(cfg);
+  const auto f0 = tracker.track(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 0.0);
+  EXPECT_TRUE(f0.ended.empty());
+  const auto f1 = tracker.track(withNoise(renderBlobs(blobs, w, h, rotation(2.0), Eigen::Vector2d(5, -3)), 3), 0.05);
+  ASSERT_GT(f1.num_lost, 0);
+  EXPECT_EQ(static_cast<int>(f1.ended.size()), f1.num_lost);
+  std::map<std::string, int> by;
+  std::set<std::uint64_t> ended, before, live;
+  for (const auto& p : f0.points) before.insert(p.id);
+  for (const auto& p : f1.points) live.insert(p.id);
+  for (const auto& e : f1.ended) {
+    ++by[e.second];
+    EXPECT_TRUE(ended.insert(e.first).second) << "track " << e.first << " listed twice";
+    EXPECT_TRUE(before.count(e.first));
+    EXPECT_FALSE(live.count(e.first));
+  }
+  EXPECT_EQ(by, f1.lost_by);
 }
 
 // peakSharpness = -(flatter Hessian eigenvalue) / peak. For a round Gaussian

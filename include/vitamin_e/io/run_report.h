@@ -2,6 +2,7 @@
 // What an offline run reports: counters and per-stage timings gathered frame by
 // frame, written as stats.json; and the progress line the runner prints.
 #include <cstddef>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,10 @@ struct RunStats {
   std::vector<double> points_per_frame;         // tracked points of each frame
   std::vector<double> mapped_points_per_frame;  // of which with a 3D position
   StageTimings timing;           // per-stage ms, with a "total" stage
+  // Per-frame counters by name (one value per frame that has it: pipeline::FrameDiagnostics),
+  // summarized in stats.json as frame_diagnostics {name: {mean, median, min, max, sum}}.
+  std::map<std::string, std::vector<double>> frame_counters;
+  void addCounter(const std::string& name, double value) { frame_counters[name].push_back(value); }
 
   // Records one processed frame: its point counts and stage times (total_ms is
   // the runner's wall time of process()).

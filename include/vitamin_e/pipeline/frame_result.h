@@ -27,6 +27,53 @@ struct FramePoint {
   std::uint8_t intensity = 0;   // image intensity at uv
 };
 
+// Per-frame counters of the map's life (issue 14): where tracks come from, why
+// they end, how many still carry a map point, how the pose was found and why
+// new points are (not) made. Filled by System from the values its stages
+// return; printed by vitamin_e_run --log-frames and summarized in stats.json.
+struct FrameDiagnostics {
+  // front end (this frame's tracking step)
+  // The balance: tracks of the previous frame = (this frame's tracks - born) + lost + dropped.
+  int tracks_born = 0;                  // new tracks detected
+  int tracks_lost = 0;                  // tracks of the previous frame the tracker ended
+  int tracks_dropped = 0;               // tracks of the previous frame the back end ended (outliers)
+  std::map<std::string, int> lost_by;   // tracks_lost by the tracker's check (tracking::TrackerFrame::lost_by)
+  // the map points the previous frame's tracks carried (when it was tracked)
+  std::size_t prev_map_points = 0;
+  std::size_t prev_map_tracked = 0;     // of them still tracked in this frame
+  std::size_t prev_map_left_view = 0;   // of the ended ones: project outside the image at this frame's pose
+  std::size_t prev_map_lost_in_view = 0;  // ... project inside it: the tracker lost them in view
+  std::map<std::string, int> prev_map_lost_by;  // the ended ones by the tracker's check ("dropped": ended by
+                                                // the back end, not by the tracker)
+  // pose
+  int pose_points = 0;                  // map points given to P3P + RANSAC
+  int pose_inliers = 0;                 // its inliers (0: not run)
+  int reused = 0;                       // map points taken over by new tracks (map reuse)
+  // mapping
+  bool keyframe = false;                // a keyframe was inserted (the first map's frame counts)
+  double keyframe_parallax_px = 0.0;    // rotation-compensated median parallax to the last keyframe [px]
+  std::size_t keyframes = 0;            // keyframes in the window after this frame
+  int triangulated = 0;                 // new map points made this frame
+  std::map<std::string, int> triangulation_rejected_by;  // tried but refused: "parallax", "reprojection",
+                                                         // "cheirality", "other"
+  // The candidates: unmapped tracks seen by a keyframe older than this frame
+  // (since the track was detected), waiting for the parallax that triangulates them.
+  std::size_t candidates = 0;
+  std::size_t candidates_two_keyframes = 0;  // of them seen by two or more keyframes (tried at each keyframe)
+  double candidate_parallax_deg = 0.0;  // median angle between a candidate's ray in the first keyframe after
+                                        // its detection and its ray in this frame (world frame): its parallax now
+  // relocalization (a frame of kRelocalizing): "" not tried, "relocalized", "not_found" (no pose from
+  // the index), "did_not_hold" (a pose found, not confirmed by the map points around it)
+  std::string relocalization;
+  int relocalization_matches = 0;       // descriptor matches with the best keyframe
+  int relocalization_inliers = 0;       // P3P inliers among them
+
+  // prev_map_tracked / prev_map_points (1 when there were none)
+  double prevMapTrackedFraction() const {
+    return prev_map_points ? static_cast<double>(prev_map_tracked) / static_cast<double>(prev_map_points) : 1.0;
+  }
+};
+
 struct FrameResult {
   std::uint64_t frame_index = 0;   // 0-based index of the frame in the stream
   double timestamp = 0.0;          // seconds, as given to process()
@@ -46,6 +93,7 @@ struct FrameResult {
   int relocalizations = 0;         // losses recovered in the existing map so far
   std::map<std::string, double> timing_ms;  // this frame's per-stage times
   std::string message;             // a human-readable note (why lost, why waiting)
+  FrameDiagnostics diagnostics;    // the counters of the map's life this frame
 };
 
 }  // namespace vitamin_e::pipeline

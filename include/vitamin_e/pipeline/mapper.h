@@ -4,6 +4,8 @@
 // of new tracks, and the keyframe window BA. Works on the Map through its
 // interface; landmarks it removes are returned so that their tracks can end.
 #include <cstdint>
+#include <map>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -22,10 +24,25 @@ struct FrameRefinement {
   bool covariance_valid = false;
 };
 
+struct KeyframeDecision {
+  bool needed = false;
+  double parallax_px = 0.0;  // rotation-compensated median parallax to the last keyframe [px]
+};
+
 struct KeyframeUpdate {
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // the new keyframe's pose after the window BA
   int triangulated = 0;                 // new landmarks
+  std::map<std::string, int> rejected_by;  // tracks tried but not triangulated, by the failed check:
+                                           // "parallax", "reprojection", "cheirality", "other"
   std::vector<std::uint64_t> removed;   // landmarks removed as outliers (their tracks must end)
+};
+
+// The unmapped tracks of a frame that a keyframe older than the frame saw
+// since the track was detected: the points waiting for triangulation.
+struct TriangulationBacklog {
+  std::size_t candidates = 0;
+  std::size_t seen_twice = 0;       // of them also seen by the newest keyframe (two or more keyframes)
+  double median_parallax_deg = 0.0; // of the angle between the ray of the first keyframe seeing it and the frame's
 };
 
 class Mapper {
@@ -38,10 +55,12 @@ class Mapper {
   FrameRefinement refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
   // Keyframe BA over the window (the newest keyframes free, the oldest fixed).
   std::vector<std::uint64_t> optimizeWindow(map::Map* map) const;
-  bool needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const;
+  KeyframeDecision needKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const;
   // Inserts the frame as a keyframe, triangulates its unmapped tracks and runs
   // the window BA. frame->landmarks is looked up again.
   KeyframeUpdate addKeyframe(FrameContext* frame, const Eigen::Isometry3d& T_w_c, map::Map* map) const;
+  // The frame's candidates for triangulation at pose T_w_c (a diagnostic; reads only).
+  TriangulationBacklog backlog(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, const map::Map& map) const;
   // Counts one more offence for each landmark; removes those at the limit
   // (pipeline.max_outlier_count) and returns their ids.
   std::vector<std::uint64_t> penalize(const std::vector<std::uint64_t>& ids, map::Map* map) const;
@@ -52,7 +71,7 @@ class Mapper {
 
  private:
   FrameRefinement bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const;
-  int triangulate(const FrameContext& frame, map::Map* map) const;
+  int triangulate(const FrameContext& frame, map::Map* map, std::map<std::string, int>* rejected_by) const;
 
   SystemConfig config_;
   camera::Camera camera_;

@@ -4,7 +4,9 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <cstdint>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vitamin_e::pipeline {
@@ -16,6 +18,7 @@ struct FrameTrack {
   Eigen::Vector2d xy;      // normalized undistorted
   std::uint8_t intensity;
   std::int8_t polarity;    // sign of the image curvature at the extremum (+1 / -1)
+  int age = 0;             // frames tracked before this one (0: detected in this frame)
 };
 
 // The output of the tracking stage, the input of the mapping stage.
@@ -26,6 +29,13 @@ struct TrackedFrame {
   std::vector<FrameTrack> tracks;
   cv::Mat image;  // the input image (shared, not copied): the relocalizer describes keyframes and lost frames
   double tracking_ms = 0.0;
+  // The tracker's counts (FrameDiagnostics): tracks detected and ended this
+  // frame, the ended ones by the check that ended them, and each ended track.
+  int tracks_born = 0;
+  int tracks_lost = 0;
+  int tracks_dropped = 0;  // tracks of the previous frame ended by the back end before this one was tracked
+  std::map<std::string, int> lost_by;
+  std::vector<std::pair<std::uint64_t, const char*>> ended;  // id, reason (static string)
   bool skipped = false;  // stamp did not increase: nothing tracked
   std::string message;
 };

@@ -24,6 +24,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -125,6 +126,10 @@ struct TrackerFrame {
   // "duplicate" (two tracks on a pixel).
   std::map<std::string, int> lost_by;
   std::map<std::string, int> lost_new_by;  // the part of lost_by that was detected in the previous frame
+  // Every ended track: its id and the lost_by name of the check that ended it
+  // (a static string), so that the losses of mapped tracks can be told apart
+  // from the churn of young ones.
+  std::vector<std::pair<std::uint64_t, const char*>> ended;
   double noise_ratio = 0;            // estimated image noise sigma / median |gradient| of this frame
   double smoothing_sigma = 0;        // pre-smoothing used for this frame [px]
   double curvature_scale = 0;        // median |kappa| of this frame (the unit of the normalized curvature)
@@ -147,7 +152,8 @@ class DenseTracker {
   TrackerFrame track(const cv::Mat& gray, double timestamp);
   // The back end removes outlier tracks: they are not tracked further and their
   // cells are refilled with new points on the next frame. Unknown ids are ignored.
-  void dropTracks(const std::vector<std::uint64_t>& ids);
+  // Returns the number of tracks removed.
+  std::size_t dropTracks(const std::vector<std::uint64_t>& ids);
   // Forgets all points and the previous frame; ids keep increasing.
   void reset();
   // New tracks get ids >= first_id from now on (ids never decrease): tracks
