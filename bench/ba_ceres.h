@@ -3,8 +3,8 @@
 // SE(3) right-perturbation manifold, analytic reprojection Jacobians (the shared formulas of
 // geometry/projection.h) and the same Geman-McClure loss, solved by Levenberg-Marquardt.
 #include <algorithm>
-#include "vitamin_e/common/timing.h"
 #include <vector>
+#include "vitamin_e/common/timing.h"
 
 #include "vitamin_e/geometry/lie.h"
 #include "vitamin_e/geometry/projection.h"
@@ -56,8 +56,13 @@ class Se3RightManifold : public ceres::Manifold {
   }
   static void toParams(const Eigen::Isometry3d& T, double* x) {
     const Eigen::Quaterniond q(T.linear());
-    x[0] = T.translation().x(); x[1] = T.translation().y(); x[2] = T.translation().z();
-    x[3] = q.x(); x[4] = q.y(); x[5] = q.z(); x[6] = q.w();
+    x[0] = T.translation().x();
+    x[1] = T.translation().y();
+    x[2] = T.translation().z();
+    x[3] = q.x();
+    x[4] = q.y();
+    x[5] = q.z();
+    x[6] = q.w();
   }
 };
 
@@ -113,10 +118,12 @@ class GemanMcClureLoss : public ceres::LossFunction {
 };
 
 // Solves `problem` in place with Ceres; returns wall time (problem construction + Solve).
-inline double solveCeres(BaProblem& problem, double sigma, double tolerance, bool sparse, int threads, int* iterations) {
+inline double solveCeres(BaProblem& problem, double sigma, double tolerance, bool sparse, int threads,
+                         int* iterations) {
   const auto t0 = TimingClock::now();
   std::vector<double> cams(7 * problem.cameras.size()), pts(3 * problem.points.size());
-  for (size_t c = 0; c < problem.cameras.size(); ++c) Se3RightManifold::toParams(problem.cameras[c].T_w_c, &cams[7 * c]);
+  for (size_t c = 0; c < problem.cameras.size(); ++c)
+    Se3RightManifold::toParams(problem.cameras[c].T_w_c, &cams[7 * c]);
   for (size_t p = 0; p < problem.points.size(); ++p) {
     Eigen::Map<Eigen::Vector3d> m(&pts[3 * p]);
     m = problem.points[p].p_w;

@@ -39,14 +39,14 @@
 
 #include "cli.h"
 #include "dense_bench_scene.h"
-#include "vitamin_e/eval/alignment.h"
-#include "vitamin_e/io/dataset.h"
-#include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/common/timing.h"
+#include "vitamin_e/eval/alignment.h"
 #include "vitamin_e/eval/trajectory.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
+#include "vitamin_e/io/dataset.h"
 #include "vitamin_e/meshing/frame_mesher.h"
 #include "vitamin_e/meshing/nltgv_denoiser.h"
+#include "vitamin_e/pipeline/system.h"
 
 using namespace vitamin_e;
 using dense_bench::Scene;
@@ -61,7 +61,7 @@ struct Args {
   int step = 3, max_frames = 0, points = 5000;
   double noise = 0.01, outliers = 0.02;
   bool no_nltgv = false;
-  double voxel_lo = 0.15, voxel_hi = 0.025;  // metres
+  double voxel_lo = 0.15, voxel_hi = 0.025;     // metres
   double max_depth_hi = 6.0, weight_ref = 3.0;  // metres
   double trunc_voxels = 5.0;                    // truncation band half-width in voxels
   // NLTGV changes on top of the config's dense section (negative: not given).
@@ -89,14 +89,13 @@ Args parse(int argc, char** argv) {
   while (args.more()) {
     if (args.positional(&a.dir) || args.value("--config", &a.config) || args.flag("--gt-input", &a.gt_input) ||
         args.value("--out", &a.out) || args.value("--step", &a.step) || args.value("--max-frames", &a.max_frames) ||
-        args.value("--points", &a.points) || args.value("--noise", &a.noise) ||
-        args.value("--outliers", &a.outliers) || args.flag("--no-nltgv", &a.no_nltgv) ||
-        args.value("--voxel-lo", &a.voxel_lo) || args.value("--voxel-hi", &a.voxel_hi) ||
-        args.value("--max-depth-2p5", &a.max_depth_hi) || args.value("--weight-ref", &a.weight_ref) ||
-        args.value("--trunc-voxels", &a.trunc_voxels) || args.flag("--no-warm", &a.no_warm) ||
-        args.flag("--warm-duals-only", &a.warm_duals_only) || args.value("--warm-iters", &a.warm_iters) ||
-        args.value("--nltgv-iters", &a.nltgv_iters) || args.value("--beta", &a.beta) ||
-        args.value("--lambda", &a.lambda)) {
+        args.value("--points", &a.points) || args.value("--noise", &a.noise) || args.value("--outliers", &a.outliers) ||
+        args.flag("--no-nltgv", &a.no_nltgv) || args.value("--voxel-lo", &a.voxel_lo) ||
+        args.value("--voxel-hi", &a.voxel_hi) || args.value("--max-depth-2p5", &a.max_depth_hi) ||
+        args.value("--weight-ref", &a.weight_ref) || args.value("--trunc-voxels", &a.trunc_voxels) ||
+        args.flag("--no-warm", &a.no_warm) || args.flag("--warm-duals-only", &a.warm_duals_only) ||
+        args.value("--warm-iters", &a.warm_iters) || args.value("--nltgv-iters", &a.nltgv_iters) ||
+        args.value("--beta", &a.beta) || args.value("--lambda", &a.lambda)) {
       continue;
     }
     args.unknown();
@@ -126,10 +125,10 @@ void applyNltgvOptions(const Args& a, meshing::NltgvConfig* c) {
 // One frame's input to the dense reconstruction (what the SLAM pipeline provides).
 struct FrameInput {
   double t = 0.0;
-  Eigen::Isometry3d T_w_c;                 // pose used for integration (map frame, map units)
+  Eigen::Isometry3d T_w_c;  // pose used for integration (map frame, map units)
   std::vector<std::uint64_t> ids;
-  std::vector<Eigen::Vector3d> p_c;        // camera-frame points (map units)
-  Eigen::Isometry3d T_w_c_true;            // ground-truth pose (evaluation only)
+  std::vector<Eigen::Vector3d> p_c;  // camera-frame points (map units)
+  Eigen::Isometry3d T_w_c_true;      // ground-truth pose (evaluation only)
 };
 
 double median(std::vector<double> v) { return percentile(std::move(v), 50.0); }
@@ -373,8 +372,8 @@ int main(int argc, char** argv) try {
 
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(0.0, 1.0);
-  std::vector<double> raw_err, smooth_err, raw_dense, smooth_dense, mesh_ms, t15_ms, t25_ms, mesh_cpu, t15_cpu,
-      t25_cpu, verts;
+  std::vector<double> raw_err, smooth_err, raw_dense, smooth_dense, mesh_ms, t15_ms, t25_ms, mesh_cpu, t15_cpu, t25_cpu,
+      verts;
   std::vector<Vector3d> seen;  // points on true surfaces the camera saw (completeness)
   for (const FrameInput& in : frames) {
     // ---- the dense reconstruction of one frame (as fusion::DenseMapper::addFrame) ----
@@ -479,14 +478,15 @@ int main(int argc, char** argv) try {
   }
   auto minOf = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); };
   if (args.gt_input) {
-    std::printf("input: ground-truth poses, KLT points <= %d, ray-cast depth, noise %.3g, outliers %.3g\n",
-                args.points, args.noise, args.outliers);
+    std::printf("input: ground-truth poses, KLT points <= %d, ray-cast depth, noise %.3g, outliers %.3g\n", args.points,
+                args.noise, args.outliers);
   } else {
     std::printf("input: SLAM (%s), %zu frames, %zu tracked; SLAM %.1f ms wall / %.1f ms process CPU per frame\n",
                 args.config.empty() ? "built-in config" : args.config.c_str(), slam_frames, slam_tracked,
-                slam_wall_ms / std::max<std::size_t>(1, slam_frames), slam_cpu_ms / std::max<std::size_t>(1, slam_frames));
-    std::printf("Sim(3) to ground truth: scale %.4f m per map unit, ATE rmse %.4f m; voxels %.4f / %.4f map units\n",
-                s, ate_rmse, c15.voxel_size, c25.voxel_size);
+                slam_wall_ms / std::max<std::size_t>(1, slam_frames),
+                slam_cpu_ms / std::max<std::size_t>(1, slam_frames));
+    std::printf("Sim(3) to ground truth: scale %.4f m per map unit, ATE rmse %.4f m; voxels %.4f / %.4f map units\n", s,
+                ate_rmse, c15.voxel_size, c25.voxel_size);
   }
   std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm)\n",
               frames.size(), args.step, median(verts), denoise ? "on" : "off", nltgv_cfg.iterations,

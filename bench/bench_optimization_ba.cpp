@@ -65,7 +65,7 @@ struct Result {
 struct Row {
   int cams = 0, points = 0, obs = 0, frames = 0;
   Result sgn, sgn_budget, ceres_sparse, ceres_dense;  // sgn_budget: max_sweeps = 5
-  Result sgn_mt, sgn_budget_mt;                        // the same with Args::threads2 threads
+  Result sgn_mt, sgn_budget_mt;                       // the same with Args::threads2 threads
   double max_cost_diff_mt = 0.0;  // max over frames of |cost(threads2) - cost(threads)| / cost(threads)
   double init_cost = 0, init_err = 0;
   const Result& ceres() const { return ceres_dense.ms < ceres_sparse.ms ? ceres_dense : ceres_sparse; }
@@ -242,7 +242,10 @@ Row runIncremental(int window_points, const Args& a) {
   }
   row.frames = F;
   for (Result* r : {&row.sgn, &row.sgn_budget, &row.ceres_sparse, &row.ceres_dense, &row.sgn_mt, &row.sgn_budget_mt}) {
-    r->ms /= F; r->cpu_ms /= F; r->cost /= F; r->err /= F;
+    r->ms /= F;
+    r->cpu_ms /= F;
+    r->cost /= F;
+    r->err /= F;
   }
   row.points /= F;
   row.obs /= F;
@@ -261,7 +264,8 @@ void printRow(const char* kind, const Row& r) {
               r.ceres_sparse.ms, r.ceres_dense.ms, double(c.iters) / r.frames, c.cost, c.err, c.ms / r.sgn.ms,
               r.sgn.cost / c.cost - 1.0);
   if (r.sgn_mt.iters > 0)
-    std::printf("%-6s %4d %6d %7d | %9.1f %5.1f %12.2f %9.2e |  (to the tolerance, more threads; max5: %.1f ms) cost diff %.1e\n",
+    std::printf("%-6s %4d %6d %7d | %9.1f %5.1f %12.2f %9.2e |  (to the tolerance, more threads; max5: %.1f ms) cost "
+                "diff %.1e\n",
                 " sgnMT", r.cams, r.points, r.obs, r.sgn_mt.ms, double(r.sgn_mt.iters) / r.frames, r.sgn_mt.cost,
                 r.sgn_mt.err, r.sgn_budget_mt.ms, r.max_cost_diff_mt);
 }
@@ -272,13 +276,15 @@ std::string jsonRow(const Row& r, bool batch) {
   std::snprintf(buf, sizeof(buf),
                 "{%s\"points\":%d,\"sgn_ms\":%.3f,\"ceres_ms\":%.3f,\"sgn_cost\":%.6f,\"ceres_cost\":%.6f,"
                 "\"sgn_cam_err\":%.3e,\"ceres_cam_err\":%.3e,\"ceres_sparse_ms\":%.3f,\"ceres_dense_ms\":%.3f,"
-                "\"sgn5_ms\":%.3f,\"sgn5_cost\":%.6f,\"sgn5_cam_err\":%.3e,\"init_cost\":%.6f,\"sgn_sweeps\":%.1f,\"sgn_rejected\":%.1f,\"sgn_cpu_ms\":%.3f,\"ceres_cpu_ms\":%.3f,\"sgn5_cpu_ms\":%.3f,"
-                "\"sgn_mt_ms\":%.3f,\"sgn_mt_cpu_ms\":%.3f,\"sgn_mt_cost\":%.6f,\"sgn_mt_sweeps\":%.1f,\"sgn5_mt_ms\":%.3f,\"sgn_mt_max_cost_rel_diff\":%.3e}",
-                batch ? ("\"cams\":" + std::to_string(r.cams) + ",").c_str() : "", r.points, r.sgn.ms, c.ms,
-                r.sgn.cost, c.cost, r.sgn.err, c.err, r.ceres_sparse.ms, r.ceres_dense.ms, r.sgn_budget.ms,
-                r.sgn_budget.cost, r.sgn_budget.err, r.init_cost, double(r.sgn.iters) / r.frames,
-                double(r.sgn.rejects) / r.frames, r.sgn.cpu_ms, c.cpu_ms, r.sgn_budget.cpu_ms, r.sgn_mt.ms,
-                r.sgn_mt.cpu_ms, r.sgn_mt.cost, double(r.sgn_mt.iters) / r.frames, r.sgn_budget_mt.ms, r.max_cost_diff_mt);
+                "\"sgn5_ms\":%.3f,\"sgn5_cost\":%.6f,\"sgn5_cam_err\":%.3e,\"init_cost\":%.6f,\"sgn_sweeps\":%.1f,"
+                "\"sgn_rejected\":%.1f,\"sgn_cpu_ms\":%.3f,\"ceres_cpu_ms\":%.3f,\"sgn5_cpu_ms\":%.3f,"
+                "\"sgn_mt_ms\":%.3f,\"sgn_mt_cpu_ms\":%.3f,\"sgn_mt_cost\":%.6f,\"sgn_mt_sweeps\":%.1f,\"sgn5_mt_ms\":%"
+                ".3f,\"sgn_mt_max_cost_rel_diff\":%.3e}",
+                batch ? ("\"cams\":" + std::to_string(r.cams) + ",").c_str() : "", r.points, r.sgn.ms, c.ms, r.sgn.cost,
+                c.cost, r.sgn.err, c.err, r.ceres_sparse.ms, r.ceres_dense.ms, r.sgn_budget.ms, r.sgn_budget.cost,
+                r.sgn_budget.err, r.init_cost, double(r.sgn.iters) / r.frames, double(r.sgn.rejects) / r.frames,
+                r.sgn.cpu_ms, c.cpu_ms, r.sgn_budget.cpu_ms, r.sgn_mt.ms, r.sgn_mt.cpu_ms, r.sgn_mt.cost,
+                double(r.sgn_mt.iters) / r.frames, r.sgn_budget_mt.ms, r.max_cost_diff_mt);
   return buf;
 }
 
@@ -288,12 +294,14 @@ int runAll(const Args& a) {
 #endif
   const std::vector<int> batch_sizes = a.quick ? std::vector<int>{1000} : std::vector<int>{1000, 5000, 20000, 50000};
   const std::vector<int> inc_sizes = a.quick ? std::vector<int>{5000} : std::vector<int>{5000, 20000};
-  std::printf("# threads=%d (sgnMT rows and *_mt / *_2threads fields: %d threads), point_iterations=%d, point_extrapolation=%d, point_tolerance=%g, incremental: free newest "
+  std::printf("# threads=%d (sgnMT rows and *_mt / *_2threads fields: %d threads), point_iterations=%d, "
+              "point_extrapolation=%d, point_tolerance=%g, incremental: free newest "
               "%d cameras of a 10-camera window, %d frames\n",
-              a.threads, a.threads2, a.point_iterations, a.point_extrapolation, a.point_tolerance, a.free_cams, a.frames);
-  std::printf("%-6s %4s %6s %7s | %9s %5s %12s %9s | %9s %9s %4s %12s %9s | %7s %8s\n", "kind", "cams", "points",
-              "obs", "sgn_ms", "sweep", "sgn_cost", "sgn_err", "csparse", "cdense", "it", "ceres_cost", "ceres_err",
-              "speedup", "cost_rel");
+              a.threads, a.threads2, a.point_iterations, a.point_extrapolation, a.point_tolerance, a.free_cams,
+              a.frames);
+  std::printf("%-6s %4s %6s %7s | %9s %5s %12s %9s | %9s %9s %4s %12s %9s | %7s %8s\n", "kind", "cams", "points", "obs",
+              "sgn_ms", "sweep", "sgn_cost", "sgn_err", "csparse", "cdense", "it", "ceres_cost", "ceres_err", "speedup",
+              "cost_rel");
   std::string jb, ji;
   for (int n : batch_sizes) {
     const Row r = runBatch(n, a);
@@ -350,10 +358,9 @@ int main(int argc, char** argv) {
   Args a;
   cli::ArgParser args(argc, argv, kUsage);
   while (args.more()) {
-    if (args.flag("--quick", &a.quick) || args.flag("--no-ceres", &a.no_ceres) ||
-        args.value("--threads", &a.threads) || args.value("--threads2", &a.threads2) ||
-        args.value("--free-cams", &a.free_cams) || args.value("--frames", &a.frames) ||
-        args.value("--point-iterations", &a.point_iterations) ||
+    if (args.flag("--quick", &a.quick) || args.flag("--no-ceres", &a.no_ceres) || args.value("--threads", &a.threads) ||
+        args.value("--threads2", &a.threads2) || args.value("--free-cams", &a.free_cams) ||
+        args.value("--frames", &a.frames) || args.value("--point-iterations", &a.point_iterations) ||
         args.value("--point-extrapolation", &a.point_extrapolation) ||
         args.value("--point-tolerance", &a.point_tolerance)) {
       continue;

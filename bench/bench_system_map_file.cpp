@@ -50,9 +50,9 @@ ve::map::MapFileContents syntheticMap(std::size_t points, std::size_t indexed_ke
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(-5.0, 5.0), n(-0.5, 0.5);
   ve::map::MapFileContents c;
-  c.camera = ve::camera::Camera(752, 480, 458.654, 457.296, 367.215, 248.375,
-                                ve::camera::DistortionModel::kRadialTangential,
-                                {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
+  c.camera =
+      ve::camera::Camera(752, 480, 458.654, 457.296, 367.215, 248.375, ve::camera::DistortionModel::kRadialTangential,
+                         {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
   c.scale_convention = "synthetic";
   c.scene_depth = 1.0;
   const ve::pipeline::RelocalizerConfig reloc;
@@ -154,8 +154,8 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       std::string error;
       if (!ve::map::saveMapFile(c, map_path, &error)) fail(error);
-      std::printf("%s: %.1f MB, written in %.0f ms\n", ve::map::mapFileHeader(c).c_str(),
-                  fs::file_size(map_path) / 1e6, ve::elapsedMs(t0));
+      std::printf("%s: %.1f MB, written in %.0f ms\n", ve::map::mapFileHeader(c).c_str(), fs::file_size(map_path) / 1e6,
+                  ve::elapsedMs(t0));
       report("synthetic map", timeLoads(map_path, config, repeat));
       // Where System::loadMap's time goes.
       const auto t1 = std::chrono::steady_clock::now();

@@ -72,16 +72,15 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
   return sxx > 0 ? sxy / sxx : 0.0;
 }
 
-const char* kUsage =
-    "usage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]\n"
-    "                         [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]\n"
-    "  --minutes M        wall-clock minutes to run (default 60)\n"
-    "  --sample-every N   frames between memory samples (default 200)\n"
-    "  --width W --height H  image size (default 376x240)\n"
-    "  --archive-voxel V  map.archive_voxel_m (default: the shipped default)\n"
-    "  --max-frames F     stop after F frames (0: no limit)\n"
-    "  --seed S           scene and noise seed\n"
-    "  --realtime         pace the frames at 20 Hz, as a camera\n";
+const char* kUsage = "usage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]\n"
+                     "                         [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]\n"
+                     "  --minutes M        wall-clock minutes to run (default 60)\n"
+                     "  --sample-every N   frames between memory samples (default 200)\n"
+                     "  --width W --height H  image size (default 376x240)\n"
+                     "  --archive-voxel V  map.archive_voxel_m (default: the shipped default)\n"
+                     "  --max-frames F     stop after F frames (0: no limit)\n"
+                     "  --seed S           scene and noise seed\n"
+                     "  --realtime         pace the frames at 20 Hz, as a camera\n";
 
 }  // namespace
 
@@ -138,10 +137,9 @@ int main(int argc, char** argv) try {
               "archive cap %zu points, dormant cap %zu points\n",
               width, height, seq.rate_hz, realtime ? " paced in real time" : "", lap_s, minutes, sample_every,
               archive_voxel, config.map.max_archive_points, config.map.max_dormant_landmarks);
-  std::printf("# scene built in %.1f s; RSS at start %.1f MB\n",
-              ve::elapsedMs(t_scene) / 1000.0, rssMb());
-  std::printf("%8s %9s %9s %9s %10s %8s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts",
-              "dormant", "traj", "retries", "ms/frame");
+  std::printf("# scene built in %.1f s; RSS at start %.1f MB\n", ve::elapsedMs(t_scene) / 1000.0, rssMb());
+  std::printf("%8s %9s %9s %9s %10s %8s %10s %8s %9s\n", "frame", "wall_min", "seq_min", "rss_mb", "map_pts", "dormant",
+              "traj", "retries", "ms/frame");
   std::fflush(stdout);
 
   std::vector<Sample> samples;
@@ -186,8 +184,8 @@ int main(int argc, char** argv) try {
       last_sample_time = now;
       samples.push_back(smp);
       std::printf("%8llu %9.2f %9.2f %9.2f %10zu %8zu %10zu %8d %9.1f\n", static_cast<unsigned long long>(smp.frame),
-                  smp.wall_min, smp.seq_min, smp.rss_mb, smp.map_points, smp.dormant, smp.trajectory,
-                  smp.init_retries, smp.ms_per_frame);
+                  smp.wall_min, smp.seq_min, smp.rss_mb, smp.map_points, smp.dormant, smp.trajectory, smp.init_retries,
+                  smp.ms_per_frame);
       std::fflush(stdout);
     }
     if (done) break;
@@ -212,8 +210,8 @@ int main(int argc, char** argv) try {
     yt.push_back(samples[i].trajectory_mb);
     yd.push_back(static_cast<double>(samples[i].dormant));
   }
-  const double rss_slope = slope(x, y);              // MB per wall minute
-  const double points_slope = slope(x, ym);          // map points per wall minute
+  const double rss_slope = slope(x, y);      // MB per wall minute
+  const double points_slope = slope(x, ym);  // map points per wall minute
   const double traj_mb_per_min = slope(x, yt);
   const double points_mb_per_min = points_slope * 64.0 / (1024.0 * 1024.0);  // ~64 B per point (archive + voxel index)
   // A dormant point: the struct plus the deque's share of its blocks.
@@ -235,8 +233,8 @@ int main(int argc, char** argv) try {
   std::printf("# RSS: start %.1f MB, second-half start %.1f MB, end %.1f MB; second-half slope %.3f MB/min "
               "(trajectory growth %.3f MB/min, map points %+.0f /min ~ %.3f MB/min, dormant points %.3f MB/min, "
               "unexplained %.3f MB/min)\n",
-              samples.front().rss_mb, y.empty() ? 0.0 : y.front(), rss_end, rss_slope, traj_mb_per_min,
-              points_slope, points_mb_per_min, dormant_mb_per_min, unexplained);
+              samples.front().rss_mb, y.empty() ? 0.0 : y.front(), rss_end, rss_slope, traj_mb_per_min, points_slope,
+              points_mb_per_min, dormant_mb_per_min, unexplained);
   std::printf("# verdict: %s (second half: %+.2f MB over %.1f min)\n",
               !enough     ? "too few samples for a verdict (run longer or sample more often)"
               : flat      ? "memory FLAT after warm-up"

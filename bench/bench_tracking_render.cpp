@@ -235,10 +235,9 @@ int main(int argc, char** argv) try {
         args.value("--adaptive", &cfg.adaptive_smoothing) || args.value("--max-sigma", &cfg.max_smoothing_sigma) ||
         args.value("--noise-ref", &cfg.noise_reference) || args.value("--blend", &cfg.prediction_blend) ||
         args.value("--nms", &cfg.nms_radius_px) || args.value("--track-sigma", &cfg.track_sigma_px) ||
-        args.value("--min-track-curvature", &cfg.min_track_curvature) ||
-        args.value("--per-cell", &cfg.max_per_cell) || args.value("--track-sharpness", &cfg.min_track_sharpness) ||
-        args.value("--extremum-weight", &cfg.extremum_weight) ||
-        args.value("--align-radius", &cfg.align_radius_px) ||
+        args.value("--min-track-curvature", &cfg.min_track_curvature) || args.value("--per-cell", &cfg.max_per_cell) ||
+        args.value("--track-sharpness", &cfg.min_track_sharpness) ||
+        args.value("--extremum-weight", &cfg.extremum_weight) || args.value("--align-radius", &cfg.align_radius_px) ||
         args.value("--align-iterations", &cfg.align_iterations) ||
         args.value("--disagree", &cfg.max_align_disagreement_px) ||
         args.value("--confirm-max-unaligned", &cfg.confirm_max_unaligned_fraction) ||
@@ -268,7 +267,10 @@ int main(int argc, char** argv) try {
   std::vector<Frame> frames = loadFrames(dir);
   frames.erase(frames.begin(), frames.begin() + std::min<size_t>(frames.size(), std::max(0, start_frame)));
   if (static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
-  if (frames.size() < 2) { std::fprintf(stderr, "need >= 2 frames with ground truth\n"); return 2; }
+  if (frames.size() < 2) {
+    std::fprintf(stderr, "need >= 2 frames with ground truth\n");
+    return 2;
+  }
   std::vector<cv::Mat> images;
   for (const Frame& f : frames) images.push_back(cv::imread(f.file, cv::IMREAD_GRAYSCALE));
 
@@ -302,9 +304,11 @@ int main(int argc, char** argv) try {
       min_tracked = std::min(min_tracked, tf.num_tracked);
       for (const auto& kv : tf.lost_by) lost_by[kv.first] += kv.second;
       if (per_frame) {
-        std::fprintf(stderr, "FRAME %zu tracked %d new %d flow_ok %d matches %d b %.1f %.1f sigma %.2f scale %.3g ratio %.3f gain %.3f:",
-                     k, tf.num_tracked, tf.num_new, tf.flow_ok, tf.flow_matches, tf.b.x(), tf.b.y(), tf.smoothing_sigma,
-                     tf.curvature_scale, tf.strength_ratio, tf.patch_gain);
+        std::fprintf(
+            stderr,
+            "FRAME %zu tracked %d new %d flow_ok %d matches %d b %.1f %.1f sigma %.2f scale %.3g ratio %.3f gain %.3f:",
+            k, tf.num_tracked, tf.num_new, tf.flow_ok, tf.flow_matches, tf.b.x(), tf.b.y(), tf.smoothing_sigma,
+            tf.curvature_scale, tf.strength_ratio, tf.patch_gain);
         for (const auto& kv : tf.lost_by) std::fprintf(stderr, " %s %d", kv.first.c_str(), kv.second);
         std::fprintf(stderr, "\n");
       }
@@ -446,16 +450,21 @@ int main(int argc, char** argv) try {
   std::printf("%-34s %14.2f %14.2f\n", "ms/frame p95", pct(ours.ms, 95), pct(klt.ms, 95));
   std::printf("%-34s %14.2f %14.2f\n", "CPU ms/frame median (all threads)", median(ours.cpu), median(klt.cpu));
   std::printf("%-34s %14.0f %14.0f\n", "track length median [frames]", median(ours.lengths), median(klt.lengths));
-  std::printf("%-34s %14.0f %14.0f\n", "  of tracks surviving one step", median(lengths_tracked), median(klt_lengths_tracked));
+  std::printf("%-34s %14.0f %14.0f\n", "  of tracks surviving one step", median(lengths_tracked),
+              median(klt_lengths_tracked));
   std::printf("%-34s %14.0f %14s\n", "age of tracked points, median", median(live_age), "");
   std::printf("%-34s %14ld %14zu\n", "tracks started", spawned, klt.lengths.size());
   std::printf("%-34s %14.4f %14.4f\n", "track steps within 1 px", our_ratio, klt_ratio);
   std::printf("%-34s %14ld %14ld\n", "track steps checked", ours.checked, klt.checked);
-  std::printf("%-34s %14.4f %14.4f\n", "after 10 frames within 1 px", ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
+  std::printf("%-34s %14.4f %14.4f\n", "after 10 frames within 1 px",
+              ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
               klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
-  std::printf("%-34s %14.3f %14.3f\n", "after 10 frames median error px", median(ours.drift_err), median(klt.drift_err));
+  std::printf("%-34s %14.3f %14.3f\n", "after 10 frames median error px", median(ours.drift_err),
+              median(klt.drift_err));
   std::printf("%-34s %14ld %14ld\n", "tracks reaching 10 frames", ours.drift_checked, klt.drift_checked);
-  std::printf("%-34s %14.3f %14s\n", "flow_ok fraction", flow_ok_pf.empty() ? 0.0 : std::accumulate(flow_ok_pf.begin(), flow_ok_pf.end(), 0.0) / flow_ok_pf.size(), "");
+  std::printf("%-34s %14.3f %14s\n", "flow_ok fraction",
+              flow_ok_pf.empty() ? 0.0 : std::accumulate(flow_ok_pf.begin(), flow_ok_pf.end(), 0.0) / flow_ok_pf.size(),
+              "");
   std::printf("%-34s %.3f %.3f %.3f %.3f %.3f\n", "error <.25 <.5 <1 <2 >=2 px", hist[0] / (double)ours.checked,
               hist[1] / (double)ours.checked, hist[2] / (double)ours.checked, hist[3] / (double)ours.checked,
               hist[4] / (double)ours.checked);
@@ -463,15 +472,18 @@ int main(int argc, char** argv) try {
     std::printf("  lost by %-24s %8ld (%ld of them new)\n", kv.first.c_str(), kv.second, lost_new_by[kv.first]);
   }
   for (const auto& kv : stage) {
-    std::printf("  stage %-26s %8.2f ms median %8.2f ms p95\n", kv.first.c_str(), median(kv.second), pct(kv.second, 95));
+    std::printf("  stage %-26s %8.2f ms median %8.2f ms p95\n", kv.first.c_str(), median(kv.second),
+                pct(kv.second, 95));
   }
   std::printf("{\"points_per_frame_median\":%.0f,\"ms_per_frame_median\":%.3f,\"ms_per_frame_p95\":%.3f,"
-              "\"track_length_median\":%.1f,\"track_length_median_surviving\":%.1f,\"tracked_age_median\":%.1f,\"klt_track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
-              "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f,\"cpu_ms_per_frame_median\":%.3f,\"klt_cpu_ms_per_frame_median\":%.3f,"
+              "\"track_length_median\":%.1f,\"track_length_median_surviving\":%.1f,\"tracked_age_median\":%.1f,\"klt_"
+              "track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
+              "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f,"
+              "\"cpu_ms_per_frame_median\":%.3f,\"klt_cpu_ms_per_frame_median\":%.3f,"
               "\"drift10_1px_ratio\":%.4f,\"klt_drift10_1px_ratio\":%.4f}\n",
               median(ours.points), median(ours.ms), pct(ours.ms, 95), median(ours.lengths), median(lengths_tracked),
-              median(live_age), median(klt.lengths), our_ratio, min_tracked,
-              median(klt.points), median(klt.ms), klt_ratio, median(ours.cpu), median(klt.cpu),
+              median(live_age), median(klt.lengths), our_ratio, min_tracked, median(klt.points), median(klt.ms),
+              klt_ratio, median(ours.cpu), median(klt.cpu),
               ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
               klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
   return 0;

@@ -104,7 +104,8 @@ class ArgParser {
   }
   [[noreturn]] void unknown() const {
     const std::string& a = current();
-    fail(a.rfind("-", 0) == 0 ? "unknown option '" + a + "' (see --help)" : "unexpected argument '" + a + "' (see --help)");
+    fail(a.rfind("-", 0) == 0 ? "unknown option '" + a + "' (see --help)"
+                              : "unexpected argument '" + a + "' (see --help)");
   }
 
  private:

@@ -146,7 +146,8 @@ int main(int argc, char** argv) {
       FILE* f = std::fopen(errors_out.c_str(), "w");
       if (!f) fail(errors_out + ": cannot write");
       std::fprintf(f, "# t_estimate[s] position_error[m]\n");
-      for (std::size_t k = 0; k < r.pairs.size(); ++k) std::fprintf(f, "%.9f %.9f\n", est[r.pairs[k].first].t, r.errors[k]);
+      for (std::size_t k = 0; k < r.pairs.size(); ++k)
+        std::fprintf(f, "%.9f %.9f\n", est[r.pairs[k].first].t, r.errors[k]);
       std::fclose(f);
     }
     if (!json_only) {

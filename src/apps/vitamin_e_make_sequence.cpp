@@ -44,7 +44,8 @@ const auto number = vitamin_e::cli::parseDouble;
 
 int integer(const std::string& key, const std::string& v) {
   const double d = number(key, v);
-  if (d != static_cast<double>(static_cast<long long>(d)) || std::abs(d) > 2e9) fail(key + " expects an integer, got '" + v + "'");
+  if (d != static_cast<double>(static_cast<long long>(d)) || std::abs(d) > 2e9)
+    fail(key + " expects an integer, got '" + v + "'");
   return static_cast<int>(d);
 }
 

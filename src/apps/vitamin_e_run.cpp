@@ -24,9 +24,9 @@
 #include <string>
 
 #include "cli.h"
+#include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/io/dataset.h"
 #include "vitamin_e/io/run_report.h"
-#include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/system.h"
@@ -116,9 +116,9 @@ std::string formatDiagnostics(const pl::FrameDiagnostics& d) {
                 "kf_par=%.1f tri=%d(%s) cand=%zu/%zu cand_par=%.2f kfs=%zu",
                 d.tracks_born, d.tracks_lost, formatCounts(d.lost_by).c_str(), d.tracks_dropped, d.prev_map_tracked,
                 d.prev_map_points, d.prev_map_left_view, d.prev_map_lost_in_view,
-                formatCounts(d.prev_map_lost_by).c_str(), d.pose_inliers, d.pose_points, d.reused, d.keyframe ? 1 : 0, d.keyframe_parallax_px, d.triangulated,
-                formatCounts(d.triangulation_rejected_by).c_str(), d.candidates, d.candidates_two_keyframes,
-                d.candidate_parallax_deg, d.keyframes);
+                formatCounts(d.prev_map_lost_by).c_str(), d.pose_inliers, d.pose_points, d.reused, d.keyframe ? 1 : 0,
+                d.keyframe_parallax_px, d.triangulated, formatCounts(d.triangulation_rejected_by).c_str(), d.candidates,
+                d.candidates_two_keyframes, d.candidate_parallax_deg, d.keyframes);
   std::string out = buf;
   if (!d.relocalization.empty()) {
     out += " reloc=" + d.relocalization + ":" + std::to_string(d.relocalization_inliers) + "/" +
@@ -238,7 +238,8 @@ Options parseArgs(int argc, char** argv) {
   if (o.print_config || o.print_reference) return o;
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
   if (o.out.empty() && !o.check) fail("--out DIR is required (see --help)");
-  if (o.localization_only && o.load_map.empty()) fail("--localization-only needs --load-map FILE (a map to localize in)");
+  if (o.localization_only && o.load_map.empty())
+    fail("--localization-only needs --load-map FILE (a map to localize in)");
   if (o.localization_only && !o.save_map.empty()) {
     fail("--localization-only does not change the map: --save-map cannot be used with it");
   }
@@ -350,8 +351,8 @@ int run(const Options& o) {
 
   const vitamin_e::camera::CameraCalibration& calib = dataset->calibration();
   if (!o.quiet) {
-    std::fprintf(stderr, "[vitamin_e_run] %s dataset '%s': %zu frames, processing %zu..%zu\n",
-                 dataset->kind().c_str(), o.dataset.c_str(), dataset->size(), o.start_frame, end - 1);
+    std::fprintf(stderr, "[vitamin_e_run] %s dataset '%s': %zu frames, processing %zu..%zu\n", dataset->kind().c_str(),
+                 o.dataset.c_str(), dataset->size(), o.start_frame, end - 1);
     std::fprintf(stderr, "[vitamin_e_run] camera (%s): %s\n", calib.format.c_str(), calib.camera.describe().c_str());
   }
   std::unique_ptr<pl::System> sequential;

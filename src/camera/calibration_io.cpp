@@ -114,8 +114,8 @@ Eigen::Isometry3d toIsometry(const std::string& path, const std::vector<double>&
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) T(r, c) = m[4 * r + c];
   const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
-  if (!T.allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-3 ||
-      R.determinant() < 0.0 || (T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
+  if (!T.allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-3 || R.determinant() < 0.0 ||
+      (T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) {
     fail(path, "'" + key + "' is not a rigid transform");
   }
   // Re-orthonormalize (files carry ~1e-6 rounding).
@@ -141,8 +141,7 @@ Camera makeCamera(const std::string& path, int w, int h, double fx, double fy, d
   try {
     Camera cam(w, h, fx, fy, cx, cy, model, dist);
     // All-zero coefficients are the pinhole model (cheaper, same result).
-    if (std::all_of(dist.begin(), dist.end(), [](double d) { return d == 0.0; }))
-      cam = Camera(w, h, fx, fy, cx, cy);
+    if (std::all_of(dist.begin(), dist.end(), [](double d) { return d == 0.0; })) cam = Camera(w, h, fx, fy, cx, cy);
     return cam;
   } catch (const CalibrationError& e) {
     fail(path, e.what());
@@ -158,8 +157,7 @@ Camera cameraFromIntrinsics(const std::string& path, const YAML::Node& node, con
       node["distortion_model"] ? parseModel(path, readString(path, node, "distortion_model")) : DistortionModel::kNone;
   std::vector<double> dist;
   if (node[dist_key]) dist = readNumbers(path, node[dist_key], dist_key);
-  return makeCamera(path, static_cast<int>(res[0]), static_cast<int>(res[1]), in[0], in[1], in[2], in[3], model,
-                    dist);
+  return makeCamera(path, static_cast<int>(res[0]), static_cast<int>(res[1]), in[0], in[1], in[2], in[3], model, dist);
 }
 
 bool looksLikeKitti(const std::string& text) {
@@ -201,7 +199,8 @@ CameraCalibration loadKalibrCamchain(const std::string& path, int cam_index) {
   CameraCalibration calib;
   calib.format = "kalibr";
   calib.camera = cameraFromIntrinsics(path, cam, "distortion_coeffs");
-  if (cam["T_cam_imu"]) calib.T_b_c = toIsometry(path, readNumbers(path, cam, "T_cam_imu", 16), key + ".T_cam_imu").inverse();
+  if (cam["T_cam_imu"])
+    calib.T_b_c = toIsometry(path, readNumbers(path, cam, "T_cam_imu", 16), key + ".T_cam_imu").inverse();
   return calib;
 }
 

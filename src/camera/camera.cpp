@@ -66,9 +66,7 @@ Eigen::Vector2d Camera::distortNormalized(const Eigen::Vector2d& xy, Eigen::Matr
   Eigen::Vector2d xy_d;
   Eigen::Matrix2d J = Eigen::Matrix2d::Identity();  // d xy_d / d xy
   switch (model_) {
-    case DistortionModel::kNone:
-      xy_d = xy;
-      break;
+    case DistortionModel::kNone: xy_d = xy; break;
     case DistortionModel::kRadialTangential: {
       const double k1 = distortion_[0], k2 = distortion_[1], p1 = distortion_[2], p2 = distortion_[3];
       const double k3 = distortion_.size() > 4 ? distortion_[4] : 0.0;
@@ -214,8 +212,7 @@ bool Camera::unproject(const Eigen::Vector2d& uv, Eigen::Vector3d* bearing_c) co
 }
 
 bool Camera::inImage(const Eigen::Vector2d& uv, double border) const {
-  return uv.x() >= border && uv.y() >= border && uv.x() <= width_ - 1.0 - border &&
-         uv.y() <= height_ - 1.0 - border;
+  return uv.x() >= border && uv.y() >= border && uv.x() <= width_ - 1.0 - border && uv.y() <= height_ - 1.0 - border;
 }
 
 void Camera::undistortionMaps(cv::Mat* map_x, cv::Mat* map_y) const {

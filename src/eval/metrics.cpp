@@ -43,7 +43,7 @@ void EvalConfig::validate() const {
   if (!(max_dt > 0.0) || !std::isfinite(max_dt)) throw std::invalid_argument("max_dt must be > 0");
   if (!(rpe_delta_s > 0.0) || !std::isfinite(rpe_delta_s)) throw std::invalid_argument("rpe_delta_s must be > 0");
   if (given_alignment && (!(given_alignment->scale > 0.0) || !std::isfinite(given_alignment->scale) ||
-                         !given_alignment->R.allFinite() || !given_alignment->t.allFinite())) {
+                          !given_alignment->R.allFinite() || !given_alignment->t.allFinite())) {
     throw std::invalid_argument("the given alignment is not a similarity transform");
   }
 }
@@ -99,7 +99,8 @@ EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, 
   }
 
   r.errors.resize(r.matched);
-  for (std::size_t k = 0; k < r.matched; ++k) r.errors[k] = (r.alignment.apply(Eigen::Vector3d(src.col(k))) - dst.col(k)).norm();
+  for (std::size_t k = 0; k < r.matched; ++k)
+    r.errors[k] = (r.alignment.apply(Eigen::Vector3d(src.col(k))) - dst.col(k)).norm();
   r.ate = errorStats(r.errors);
 
   r.aligned = estimate;
@@ -110,8 +111,8 @@ EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, 
   for (std::size_t k = 0; k + 1 < r.matched; ++k) {
     const auto [ia, ga] = r.pairs[k];
     const auto [ib, gb] = r.pairs[k + 1];
-    rpe1.push_back(relativeError(estimate[ia].T_w_c, estimate[ib].T_w_c, ground_truth[ga].T_w_c,
-                                 ground_truth[gb].T_w_c, s));
+    rpe1.push_back(
+        relativeError(estimate[ia].T_w_c, estimate[ib].T_w_c, ground_truth[ga].T_w_c, ground_truth[gb].T_w_c, s));
   }
   std::size_t m = 0;
   for (std::size_t k = 0; k < r.matched; ++k) {
@@ -121,8 +122,8 @@ EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, 
     if (m >= r.matched) break;
     const auto [ia, ga] = r.pairs[k];
     const auto [ib, gb] = r.pairs[m];
-    rpe_d.push_back(relativeError(estimate[ia].T_w_c, estimate[ib].T_w_c, ground_truth[ga].T_w_c,
-                                  ground_truth[gb].T_w_c, s));
+    rpe_d.push_back(
+        relativeError(estimate[ia].T_w_c, estimate[ib].T_w_c, ground_truth[ga].T_w_c, ground_truth[gb].T_w_c, s));
   }
   r.rpe_frame = errorStats(rpe1);
   r.rpe_delta = errorStats(rpe_d);
@@ -157,8 +158,10 @@ std::string summary(const EvalResult& r, const EvalConfig& config) {
   o << buf;
   const Eigen::AngleAxisd aa(r.alignment.R);
   std::snprintf(buf, sizeof(buf), "alignment (%s): scale %.6f, rotation %.3f deg, translation [%.3f %.3f %.3f] m\n",
-                config.given_alignment ? "given" : config.align_scale ? "Sim(3)" : "SE(3)", r.alignment.scale, aa.angle() * 180.0 / M_PI,
-                r.alignment.t.x(), r.alignment.t.y(), r.alignment.t.z());
+                config.given_alignment ? "given"
+                : config.align_scale   ? "Sim(3)"
+                                       : "SE(3)",
+                r.alignment.scale, aa.angle() * 180.0 / M_PI, r.alignment.t.x(), r.alignment.t.y(), r.alignment.t.z());
   o << buf;
   std::snprintf(buf, sizeof(buf), "ATE [cm]: rmse %.3f  mean %.3f  median %.3f  max %.3f\n", 100.0 * r.ate.rmse,
                 100.0 * r.ate.mean, 100.0 * r.ate.median, 100.0 * r.ate.max);

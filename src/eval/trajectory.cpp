@@ -87,8 +87,7 @@ void forEachNumberLine(const std::string& path, std::size_t min_count, std::size
 }
 
 void sortByTime(Trajectory* traj) {
-  std::stable_sort(traj->begin(), traj->end(),
-                   [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
+  std::stable_sort(traj->begin(), traj->end(), [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
 }
 
 std::string firstDataLine(const std::string& path) {
@@ -139,14 +138,14 @@ std::string resolveTrajectoryPath(const std::string& path) {
 
 Trajectory readTum(const std::string& path) {
   Trajectory traj;
-  forEachNumberLine(path, 8, 8, "expected 8 numbers 't tx ty tz qx qy qz qw'",
-                    [&](const std::string&, const std::vector<double>& v, int line_no) {
-                      StampedPose sp;
-                      sp.t = v[0];
-                      sp.T_w_c = makePose({v[1], v[2], v[3]}, Eigen::Quaterniond(v[7], v[4], v[5], v[6]), path,
-                                          line_no);
-                      traj.push_back(sp);
-                    });
+  forEachNumberLine(
+      path, 8, 8, "expected 8 numbers 't tx ty tz qx qy qz qw'",
+      [&](const std::string&, const std::vector<double>& v, int line_no) {
+        StampedPose sp;
+        sp.t = v[0];
+        sp.T_w_c = makePose({v[1], v[2], v[3]}, Eigen::Quaterniond(v[7], v[4], v[5], v[6]), path, line_no);
+        traj.push_back(sp);
+      });
   sortByTime(&traj);
   return traj;
 }
@@ -229,8 +228,7 @@ void writeTum(const std::string& path, const Trajectory& trajectory) {
   for (const auto& sp : trajectory) {
     const Eigen::Quaterniond q(sp.T_w_c.rotation());
     const Eigen::Vector3d& p = sp.T_w_c.translation();
-    std::fprintf(f, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", sp.t, p.x(), p.y(), p.z(), q.x(), q.y(),
-                 q.z(), q.w());
+    std::fprintf(f, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", sp.t, p.x(), p.y(), p.z(), q.x(), q.y(), q.z(), q.w());
   }
   if (std::fclose(f) != 0) throw TrajectoryError(path + ": write failed");
 }
@@ -261,7 +259,8 @@ Eigen::Isometry3d loadBodyToCamera(const std::string& sensor_yaml) {
   } catch (const YAML::Exception& e) {
     throw TrajectoryError(sensor_yaml + ": " + e.what());
   }
-  if (data.size() != 16) throw TrajectoryError(sensor_yaml + ": T_BS needs 16 numbers, got " + std::to_string(data.size()));
+  if (data.size() != 16)
+    throw TrajectoryError(sensor_yaml + ": T_BS needs 16 numbers, got " + std::to_string(data.size()));
   Eigen::Matrix4d M;
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) M(r, c) = data[4 * r + c];

@@ -26,9 +26,7 @@ int edgeBetween(int p, int q) {
   std::abort();  // p, q are not the ends of a cube edge
 }
 
-Eigen::Vector3d edgeMid(int e) {
-  return cornerPos(kEdgeLo[e]) + 0.5 * Eigen::Vector3d::Unit(e / 4);
-}
+Eigen::Vector3d edgeMid(int e) { return cornerPos(kEdgeLo[e]) + 0.5 * Eigen::Vector3d::Unit(e / 4); }
 
 // True if cube edges a and b lie on a common face (then the neighbour across
 // that face also holds both, and a triangle edge between them must be a segment).
@@ -145,7 +143,9 @@ TriangleMesh marchingCubesGrid(const std::vector<float>& values, int nx, int ny,
     throw std::invalid_argument("marchingCubesGrid: values.size() != nx * ny * nz");
   TriangleMesh mesh;
   std::unordered_map<std::int64_t, int> index;  // (grid point, axis) -> vertex
-  auto at = [&](int x, int y, int z) { return values[static_cast<std::size_t>(x) + nx * (y + static_cast<std::size_t>(ny) * z)]; };
+  auto at = [&](int x, int y, int z) {
+    return values[static_cast<std::size_t>(x) + nx * (y + static_cast<std::size_t>(ny) * z)];
+  };
   for (int z = 0; z + 1 < nz; ++z)
     for (int y = 0; y + 1 < ny; ++y)
       for (int x = 0; x + 1 < nx; ++x) {
@@ -163,7 +163,8 @@ TriangleMesh marchingCubesGrid(const std::vector<float>& values, int nx, int ny,
           if (vid[e] >= 0) return;
           const int lo = kEdgeLo[e], hi = lo | (1 << (e / 4));
           const int gx = x + (lo & 1), gy = y + ((lo >> 1) & 1), gz = z + ((lo >> 2) & 1);
-          const std::int64_t key = 3 * (static_cast<std::int64_t>(gx) + nx * (gy + static_cast<std::int64_t>(ny) * gz)) + e / 4;
+          const std::int64_t key =
+              3 * (static_cast<std::int64_t>(gx) + nx * (gy + static_cast<std::int64_t>(ny) * gz)) + e / 4;
           const float s = v[lo] / (v[lo] - v[hi]);
           pos[e] = Eigen::Vector3f(static_cast<float>(gx), static_cast<float>(gy), static_cast<float>(gz));
           pos[e][e / 4] += s;

@@ -26,8 +26,7 @@ meshing::PinholeImage scaled(const meshing::PinholeImage& image, int s) {
 std::vector<float> rasterize(const meshing::FrameMesh& mesh, double scale, double offset, int w, int h) {
   std::vector<float> inv(static_cast<std::size_t>(w) * h, 0.0f);
   std::vector<Eigen::Vector2d> uv(mesh.vertices.size());
-  for (std::size_t i = 0; i < uv.size(); ++i)
-    uv[i] = (mesh.vertices[i].uv.array() + offset) * scale - offset;
+  for (std::size_t i = 0; i < uv.size(); ++i) uv[i] = (mesh.vertices[i].uv.array() + offset) * scale - offset;
   for (const auto& t : mesh.triangles) {
     const Eigen::Vector2d& a = uv[t[0]];
     const Eigen::Vector2d& b = uv[t[1]];
@@ -175,9 +174,8 @@ IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth, con
           if (sdf < -trunc) continue;
           const float f = static_cast<float>(std::min(sdf, trunc));
           const float w = vox->weight;
-          const float m = cfg.weight_depth_ref > 0.0
-                              ? static_cast<float>(std::min(1.0, sq(cfg.weight_depth_ref / zm)))
-                              : 1.0f;
+          const float m =
+              cfg.weight_depth_ref > 0.0 ? static_cast<float>(std::min(1.0, sq(cfg.weight_depth_ref / zm))) : 1.0f;
           vox->sdf = (vox->sdf * w + m * f) / (w + m);
           vox->weight = std::min(w + m, max_w);
           ++updated;

@@ -1,10 +1,10 @@
 #include "vitamin_e/geometry/pnp.h"
 
 #include <Eigen/Dense>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core/eigen.hpp>
 #include <algorithm>
 #include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 #include <stdexcept>
 
 #include "vitamin_e/geometry/lie.h"
@@ -147,10 +147,9 @@ PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w, const std::vec
     }
     cv::Mat rvec, tvec;
     std::vector<int> idx;
-    const bool found =
-        cv::solvePnPRansac(obj, img, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false,
-                           config.max_iterations, static_cast<float>(config.ransac_threshold_px / config.focal_px),
-                           config.confidence, idx, cv::SOLVEPNP_AP3P);
+    const bool found = cv::solvePnPRansac(
+        obj, img, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false, config.max_iterations,
+        static_cast<float>(config.ransac_threshold_px / config.focal_px), config.confidence, idx, cv::SOLVEPNP_AP3P);
     if (!found || static_cast<int>(idx.size()) < 4) {
       res.reason = "RANSAC found no pose";
       res.inliers.assign(n, false);

@@ -112,8 +112,7 @@ TriangulationResult triangulatePoint(const std::vector<Eigen::Isometry3d>& T_w_c
   }
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b)
-      res.parallax_deg =
-          std::max(res.parallax_deg, parallaxDeg(T_w_c[a].translation(), T_w_c[b].translation(), p));
+      res.parallax_deg = std::max(res.parallax_deg, parallaxDeg(T_w_c[a].translation(), T_w_c[b].translation(), p));
 
   if (!res.cheirality_ok) {
     res.reason = "cheirality: point behind a camera";

@@ -32,7 +32,8 @@ void TwoViewConfig::validate() const {
     throw std::invalid_argument("planar_distinct_deg must be in (0, 180)");
   if (!(ambiguous_rival_ratio > 0.0)) throw std::invalid_argument("ambiguous_rival_ratio must be > 0");
   if (!(homography_min_gain >= 0.0)) throw std::invalid_argument("homography_min_gain must be >= 0");
-  if (!(min_valid_ratio >= 0.0 && min_valid_ratio <= 1.0)) throw std::invalid_argument("min_valid_ratio must be in [0, 1]");
+  if (!(min_valid_ratio >= 0.0 && min_valid_ratio <= 1.0))
+    throw std::invalid_argument("min_valid_ratio must be in [0, 1]");
 }
 
 Eigen::Matrix3d fitRotationOnly(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
@@ -330,8 +331,7 @@ TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const s
   // essential one by a few points of noise (V2_02's 12 s render: 3831 vs 3784 points, and
   // the homography's motion was the wrong one). The twisted motion loses about half of
   // the points, so a homography motion must beat the essential one clearly.
-  if (best_index > 0 &&
-      recs[best_index].num_valid < (1.0 + config.homography_min_gain) * recs[0].num_valid) {
+  if (best_index > 0 && recs[best_index].num_valid < (1.0 + config.homography_min_gain) * recs[0].num_valid) {
     best_index = 0;
   }
   if (res.planar && best_index > 0) {

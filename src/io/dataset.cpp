@@ -85,9 +85,9 @@ camera::CameraCalibration loadCalibrationFor(const std::string& path, int width,
 void checkImageSize(const cv::Mat& image, const std::string& image_path, const camera::CameraCalibration& calib,
                     const std::string& calib_path) {
   if (image.cols == calib.camera.width() && image.rows == calib.camera.height()) return;
-  throw DatasetError("image '" + image_path + "' is " + std::to_string(image.cols) + "x" +
-                     std::to_string(image.rows) + " but the calibration '" + calib_path + "' is for " +
-                     std::to_string(calib.camera.width()) + "x" + std::to_string(calib.camera.height()));
+  throw DatasetError("image '" + image_path + "' is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                     " but the calibration '" + calib_path + "' is for " + std::to_string(calib.camera.width()) + "x" +
+                     std::to_string(calib.camera.height()));
 }
 
 std::string trim(const std::string& s) {

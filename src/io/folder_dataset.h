@@ -21,7 +21,9 @@ class FolderDataset : public Dataset {
  public:
   FolderDataset(std::string kind, std::vector<FrameFile> frames, camera::CameraCalibration calibration,
                 std::string ground_truth)
-      : kind_(std::move(kind)), frames_(std::move(frames)), calibration_(std::move(calibration)),
+      : kind_(std::move(kind)),
+        frames_(std::move(frames)),
+        calibration_(std::move(calibration)),
         ground_truth_(std::move(ground_truth)) {}
 
   std::string kind() const override { return kind_; }

@@ -49,7 +49,8 @@ std::string firstExisting(const std::vector<fs::path>& candidates) {
 std::unique_ptr<Dataset> openEuroc(const fs::path& path, const DatasetOptions& options) {
   std::error_code ec;
   const fs::path cam = findEurocCamFolder(path);
-  if (!fs::is_directory(cam, ec)) throw DatasetError("EuRoC folder '" + path.string() + "' has no '" + cam.string() + "'");
+  if (!fs::is_directory(cam, ec))
+    throw DatasetError("EuRoC folder '" + path.string() + "' has no '" + cam.string() + "'");
   const fs::path csv = cam / "data.csv";
   if (!fs::is_regular_file(csv, ec)) throw DatasetError("EuRoC folder '" + cam.string() + "' has no data.csv");
   const fs::path images = cam / "data";
@@ -101,9 +102,9 @@ std::unique_ptr<Dataset> openEuroc(const fs::path& path, const DatasetOptions& o
 
   // The folder holding mav0/ (a render's groundtruth_cam0_tum.txt is the camera trajectory: preferred).
   const fs::path mav0 = cam.parent_path();
-  const std::string gt = firstExisting({mav0.parent_path() / "groundtruth_cam0_tum.txt",
-                                        mav0 / "groundtruth_cam0_tum.txt",
-                                        mav0 / "state_groundtruth_estimate0" / "data.csv"});
+  const std::string gt =
+      firstExisting({mav0.parent_path() / "groundtruth_cam0_tum.txt", mav0 / "groundtruth_cam0_tum.txt",
+                     mav0 / "state_groundtruth_estimate0" / "data.csv"});
   return std::make_unique<FolderDataset>("euroc", std::move(frames), std::move(calib), gt);
 }
 

@@ -103,10 +103,10 @@ std::string toJson(const RunStats& s) {
     for (const auto& [name, v] : s.frame_counters) {
       if (v.empty()) continue;
       os << (first ? "" : ",") << "\n    " << jsonString(name) << ": {\"mean\": " << number(mean(v))
-         << ", \"median\": " << number(percentile(v, 50.0)) << ", \"min\": "
-         << number(*std::min_element(v.begin(), v.end())) << ", \"max\": "
-         << number(*std::max_element(v.begin(), v.end())) << ", \"sum\": "
-         << number(std::accumulate(v.begin(), v.end(), 0.0)) << "}";
+         << ", \"median\": " << number(percentile(v, 50.0))
+         << ", \"min\": " << number(*std::min_element(v.begin(), v.end()))
+         << ", \"max\": " << number(*std::max_element(v.begin(), v.end()))
+         << ", \"sum\": " << number(std::accumulate(v.begin(), v.end(), 0.0)) << "}";
       first = false;
     }
     os << (first ? "" : "\n  ") << "},\n";
@@ -158,8 +158,7 @@ std::string formatDuration(double seconds) {
   return buf;
 }
 
-std::string formatProgress(std::size_t done, std::size_t total, double elapsed_s, double tracked_ratio,
-                           int bar_width) {
+std::string formatProgress(std::size_t done, std::size_t total, double elapsed_s, double tracked_ratio, int bar_width) {
   const double frac = total ? std::min(1.0, static_cast<double>(done) / static_cast<double>(total)) : 1.0;
   const double fps = elapsed_s > 0.0 ? static_cast<double>(done) / elapsed_s : 0.0;
   const double eta = fps > 0.0 ? static_cast<double>(total - std::min(done, total)) / fps : NAN;
@@ -169,8 +168,8 @@ std::string formatProgress(std::size_t done, std::size_t total, double elapsed_s
     out = "[" + std::string(filled, '#') + std::string(bar_width - filled, '.') + "] ";
   }
   char buf[160];
-  std::snprintf(buf, sizeof(buf), "%zu/%zu %5.1f%%  %.1f fps  ETA %s  tracked %.0f%%", done, total, 100.0 * frac,
-                fps, done >= total ? "0s" : formatDuration(eta).c_str(), 100.0 * tracked_ratio);
+  std::snprintf(buf, sizeof(buf), "%zu/%zu %5.1f%%  %.1f fps  ETA %s  tracked %.0f%%", done, total, 100.0 * frac, fps,
+                done >= total ? "0s" : formatDuration(eta).c_str(), 100.0 * tracked_ratio);
   return out + buf;
 }
 

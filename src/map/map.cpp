@@ -1,9 +1,9 @@
 #include "vitamin_e/map/map.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <algorithm>
 
 namespace vitamin_e::map {
 
@@ -309,7 +309,8 @@ void Map::restore(const MapSnapshot& s) {
   }
   for (const DormantLandmark& d : s.dormant) {
     check(d.p_w.allFinite(), "dormant landmark " + std::to_string(d.id) + " has a non-finite position");
-    check(d.polarity >= -1 && d.polarity <= 1, "dormant landmark " + std::to_string(d.id) + " has a bad curvature sign");
+    check(d.polarity >= -1 && d.polarity <= 1,
+          "dormant landmark " + std::to_string(d.id) + " has a bad curvature sign");
   }
   for (const ArchivedPoint& a : s.archive) check(a.p_w.allFinite(), "an archived point is not finite");
   check(std::isfinite(s.archive_voxel) && s.archive_voxel >= 0.0, "the archive voxel is not a size");

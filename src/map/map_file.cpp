@@ -194,7 +194,8 @@ MapFileContents parsePayload(const std::string& payload, const std::string& what
     for (std::uint64_t i = 0; i < n; ++i) {
       const std::uint64_t id = r.get<std::uint64_t>();
       const double x = r.getFinite("observation"), y = r.getFinite("observation");
-      if (!kf.observations.emplace(id, Eigen::Vector2d(x, y)).second) r.fail(name + " observes track " + std::to_string(id) + " twice");
+      if (!kf.observations.emplace(id, Eigen::Vector2d(x, y)).second)
+        r.fail(name + " observes track " + std::to_string(id) + " twice");
     }
   }
   const std::uint64_t num_landmarks = r.getCount(kLandmarkBytes, "landmarks");
@@ -208,7 +209,8 @@ MapFileContents parsePayload(const std::string& payload, const std::string& what
     l.num_observations = r.get<std::int32_t>();
     l.last_seen_frame = r.get<std::uint64_t>();
     l.outlier_count = r.get<std::int32_t>();
-    if (l.num_observations < 0 || l.outlier_count < 0) r.fail("landmark " + std::to_string(l.id) + " has negative counts");
+    if (l.num_observations < 0 || l.outlier_count < 0)
+      r.fail("landmark " + std::to_string(l.id) + " has negative counts");
   }
   c.map.dormant_dropped = r.get<std::uint64_t>();
   const std::uint64_t num_dormant = r.getCount(kDormantBytes, "dormant landmarks");

@@ -146,7 +146,9 @@ class Triangulator {
   std::vector<Eigen::Vector2d> p_;
   std::vector<Tri> tris_;
   std::vector<int> mark_, free_, bad_, created_;
-  struct EdgeRec { int a, b, outer, from; };
+  struct EdgeRec {
+    int a, b, outer, from;
+  };
   std::vector<EdgeRec> edges_;
   int stamp_ = 0;
   int last_ = 0;

@@ -43,7 +43,8 @@ SyntheticBa makeSyntheticBa(const SyntheticBaConfig& cfg) {
   for (int i = 0; i < cfg.num_points; ++i) {
     for (int attempt = 0; attempt < 100; ++attempt) {
       const int max_len = std::min(cfg.max_track, N);
-      const int len = cfg.min_track + static_cast<int>(uni(rng) * (max_len - cfg.min_track + 1)) % (max_len - cfg.min_track + 1);
+      const int len =
+          cfg.min_track + static_cast<int>(uni(rng) * (max_len - cfg.min_track + 1)) % (max_len - cfg.min_track + 1);
       const int start = -(len - 1) + static_cast<int>(uni(rng) * (N + len - 1)) % (N + len - 1);
       const int first = std::max(0, start), last = std::min(N - 1, start + len - 1);
       if (last - first < 1) continue;

@@ -30,7 +30,7 @@ void BaOptions::validate() const {
 namespace detail {
 
 namespace {
-constexpr double kSpinUs = 100.0;  // a worker spins this long for the next loop before sleeping
+constexpr double kSpinUs = 100.0;    // a worker spins this long for the next loop before sleeping
 constexpr int kChunksPerThread = 8;  // chunks per parallel loop and thread (< 2^16 in all)
 inline void cpuRelax() {
 #if defined(__x86_64__) || defined(__i386__)
@@ -49,9 +49,7 @@ WorkerPool::WorkerPool(int threads) : n_(std::max(1, threads)) {
 WorkerPool::~WorkerPool() {
   stop_.store(true);
   state_.store(static_cast<std::uint64_t>(++gen_) << 32);
-  {
-    std::lock_guard<std::mutex> lock(m_);
-  }
+  { std::lock_guard<std::mutex> lock(m_); }
   cv_.notify_all();
   for (auto& w : workers_) w.join();
 }
@@ -92,7 +90,8 @@ void WorkerPool::loop() {
     std::uint64_t v = state_.load(std::memory_order_acquire);
     if (static_cast<std::uint32_t>(v >> 32) == seen) {
       const auto t0 = std::chrono::steady_clock::now();
-      for (int spin = 0; static_cast<std::uint32_t>((v = state_.load(std::memory_order_acquire)) >> 32) == seen; ++spin) {
+      for (int spin = 0; static_cast<std::uint32_t>((v = state_.load(std::memory_order_acquire)) >> 32) == seen;
+           ++spin) {
         cpuRelax();
         if ((spin & 63) != 63 ||
             std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() < kSpinUs)
@@ -278,8 +277,7 @@ void SubspaceGn::solveStep(double lambda) {
       for (int l = i + 1; l < ncf; ++l) S_.at(l, i) = S_.at(i, l).transpose();
     if (O_.camera_solver == BaOptions::CameraSolver::kConjugateGradient)
       solveBlockPcg(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
-    else
-      solveBlockGaussSeidel(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
+    else solveBlockGaussSeidel(S_, b_, O_.camera_iterations, O_.camera_gs_tolerance, &dc_);
     pointUpdates();
     return;
   }

@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cstdint>
 #include <condition_variable>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -182,7 +182,7 @@ class SubspaceGn {
   std::vector<Eigen::Isometry3d> saved_cams_;
   std::vector<std::vector<Matrix6d>> Hcc_t_;  // per-chunk camera blocks (upper triangle)
   std::vector<std::vector<Vector6d>> gc_t_, hdiag_t_;
-  std::vector<BlockMatrix6> S_t_;              // per-chunk reduced camera system (upper triangle)
+  std::vector<BlockMatrix6> S_t_;  // per-chunk reduced camera system (upper triangle)
   std::vector<std::vector<Vector6d>> b_t_;
 };
 

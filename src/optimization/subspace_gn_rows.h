@@ -74,8 +74,7 @@ struct ObsEval {
   // Camera rows: Hcc += w Jc^T Jc (upper triangle; with Hcc null only its diagonal, into
   // hdiag), gc += w Jc^T r; with Jc/Wjp, stores the camera rows and the weighted point rows
   // (H_cp = Jc^T Wjp).
-  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* hdiag, Vector6d* gc, Matrix26d* Jc,
-                        Matrix23d* Wjp) const {
+  inline void addCamera(double w, Matrix6d* Hcc, Vector6d* hdiag, Vector6d* gc, Matrix26d* Jc, Matrix23d* Wjp) const {
     const double jc0[6] = {A, 0.0, B, B * y, A * z - B * x, -A * y};
     const double jc1[6] = {0.0, C, D, D * y - C * z, -D * x, C * x};
     const double wr0 = w * r0, wr1 = w * r1;
@@ -112,8 +111,8 @@ struct ObservationRows {
   using C2 = Eigen::Map<const A2>;
   A2 xy, AC, BD, r, wr, j0, j1, j2, wj0, wj1, wj2;
   double rho = 0.0, w = 0.0;
-  inline void evaluate(const double* q, double d0, double d1, double d2, double z, const double* uv,
-                       const A2& fxy, const A2& cxy, double s2) {
+  inline void evaluate(const double* q, double d0, double d1, double d2, double z, const double* uv, const A2& fxy,
+                       const A2& cxy, double s2) {
     xy = C2(q) * d0 + C2(q + 2) * d1 + C2(q + 4) * d2;
     const double iz = 1.0 / z;
     AC = fxy * iz;

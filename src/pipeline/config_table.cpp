@@ -25,7 +25,8 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("smoothing_sigma", &tk.smoothing_sigma, "Gaussian pre-smoothing before the derivatives [px] (0 = none)");
   t.key("adaptive_smoothing", &tk.adaptive_smoothing,
         "raise the smoothing on noisy images (noise / median gradient above noise_reference)");
-  t.key("max_smoothing_sigma", &tk.max_smoothing_sigma, "upper bound of the adaptive smoothing [px] (>= smoothing_sigma)");
+  t.key("max_smoothing_sigma", &tk.max_smoothing_sigma,
+        "upper bound of the adaptive smoothing [px] (>= smoothing_sigma)");
   t.key("noise_reference", &tk.noise_reference,
         "noise sigma / median raw gradient above which the smoothing grows as sqrt(ratio / this) (> 0)");
   t.key("kappa_smoothing_sigma", &tk.kappa_smoothing_sigma,
@@ -52,7 +53,8 @@ std::vector<Field> configTable(SystemConfig& c) {
         "[0, 1): moves the sub-pixel extremum this far toward the prediction when within 1 px (where the patch "
         "filter, extremum_weight < 1, does not apply)");
   t.key("polish_steps", &tk.polish_steps, "after the climb, steps climbing kappa alone, without the prior (0 = off)");
-  t.key("fb_threshold_px", &tk.fb_threshold_px, "forward-backward check: largest distance back to the old position [px]");
+  t.key("fb_threshold_px", &tk.fb_threshold_px,
+        "forward-backward check: largest distance back to the old position [px]");
   t.key("min_track_curvature", &tk.min_track_curvature, "a track ends when its normalized kappa falls below this");
   t.key("max_curvature_ratio", &tk.max_curvature_ratio,
         "... or when its normalized abs(kappa) changes by more than this factor (>= 1)");
@@ -94,14 +96,16 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("confidence", &in.confidence, "RANSAC confidence, (0, 1)");
   t.key("max_iterations", &in.max_iterations, "RANSAC iterations at most");
   t.key("max_reproj_error_px", &in.max_reproj_error_px, "a point must reproject within this in both views [px]");
-  t.key("point_min_parallax_deg", &in.point_min_parallax_deg, "points with less parallax stay out (near infinity) [deg]");
+  t.key("point_min_parallax_deg", &in.point_min_parallax_deg,
+        "points with less parallax stay out (near infinity) [deg]");
   t.key("rotation_only_max_ratio", &in.rotation_only_max_ratio,
         "refused when the rotation-only model has >= this x the essential inliers");
   t.key("planar_min_ratio", &in.planar_min_ratio,
         "homography motions compete when a homography explains this share of the essential inliers (> 1: never)");
   t.key("homography_min_gain", &in.homography_min_gain,
         "a homography motion wins when it puts (1 + this) x as many points in front of both cameras");
-  t.key("planar_distinct_deg", &in.planar_distinct_deg, "translations further apart than this are different motions [deg]");
+  t.key("planar_distinct_deg", &in.planar_distinct_deg,
+        "translations further apart than this are different motions [deg]");
   t.key("ambiguous_rival_ratio", &in.ambiguous_rival_ratio,
         "ambiguous when a different motion triangulates >= this x the best one's points");
   t.key("refuse_ambiguous", &in.refuse_ambiguous, "true: an ambiguous initialization is refused; false: only flagged");
@@ -137,8 +141,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   using Solver = optimization::BaOptions::CameraSolver;
   t.key("robust_sigma_px", &b.robust_sigma_px, "Geman-McClure sigma [px]");
   t.internal("max_sweeps", &b.max_sweeps, "per solve: pipeline.ba_frame_sweeps or pipeline.ba_keyframe_sweeps");
-  t.internal("compute_covariance", &b.compute_covariance,
-             "the per-frame BA returns the frame's pose covariance (FrameResult::T_w_c_covariance), the keyframe BA not");
+  t.internal(
+      "compute_covariance", &b.compute_covariance,
+      "the per-frame BA returns the frame's pose covariance (FrameResult::T_w_c_covariance), the keyframe BA not");
   t.key("tolerance", &b.tolerance, "converged when an accepted sweep changes the cost by less than this (relative)");
   t.key("threads", &b.threads, "threads for the loops over points (1 = serial)");
   t.key("use_schur", &b.use_schur, "eliminate the points inside each camera update (Schur complement)");
@@ -148,19 +153,22 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("camera_iterations", &b.camera_iterations, "iterations (CG) or passes (Gauss-Seidel) of that solver at most");
   t.key("camera_gs_tolerance", &b.camera_gs_tolerance, "its stopping tolerance, relative (both solvers)");
   t.key("plain_gs_passes", &b.plain_gs_passes, "without use_schur: passes of the plain Gauss-Seidel (Eq. 11/12)");
-  t.key("initial_lambda", &b.initial_lambda, "Levenberg-Marquardt damping at the start, relative to the block diagonals");
+  t.key("initial_lambda", &b.initial_lambda,
+        "Levenberg-Marquardt damping at the start, relative to the block diagonals");
   t.key("max_retries", &b.max_retries, "damped re-solves per sweep before giving up");
   t.key("point_iterations", &b.point_iterations,
         "Gauss-Newton steps on every point alone (cameras fixed) after each accepted sweep");
   t.key("point_extrapolation", &b.point_extrapolation,
         "per point, doublings of an accepted step while its cost keeps decreasing (0 = plain Gauss-Newton)");
-  t.key("point_tolerance", &b.point_tolerance, "a point stops iterating when a step gains less than this share of its cost");
+  t.key("point_tolerance", &b.point_tolerance,
+        "a point stops iterating when a step gains less than this share of its cost");
 
   // --- map ---
   t.section("map");
   auto& m = c.map;
   t.key("max_keyframes", &m.max_keyframes, "keyframes in the active window (>= 2)");
-  t.key("archive_voxel_m", &m.archive_voxel_m, "retired points archived: 0 = all, else one per voxel of this size (map units)");
+  t.key("archive_voxel_m", &m.archive_voxel_m,
+        "retired points archived: 0 = all, else one per voxel of this size (map units)");
   t.key("max_archive_points", &m.max_archive_points,
         "cap on archived points (~70 B each): reaching it doubles the voxel and thins the archive to half");
   t.key("min_observations_to_archive", &m.min_observations_to_archive,
@@ -171,7 +179,8 @@ std::vector<Field> configTable(SystemConfig& c) {
   // --- pipeline ---
   t.section("pipeline");
   t.key("min_init_tracks", &c.min_init_tracks, "tracks shared with the reference frame needed to try initializing");
-  t.key("init_min_disparity_px", &c.init_min_disparity_px, "median track displacement before the two-view fit is tried [px]");
+  t.key("init_min_disparity_px", &c.init_min_disparity_px,
+        "median track displacement before the two-view fit is tried [px]");
   t.key("init_max_pending_frames", &c.init_max_pending_frames,
         "frames kept since the reference; beyond it the reference moves on");
   t.key("min_pose_inliers", &c.min_pose_inliers, "fewer P3P inliers than this: the frame is lost");
@@ -180,8 +189,10 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("weak_pose_max_step_ratio", &c.weak_pose_max_step_ratio,
         "... unless its translation step is within this factor of the motion model's (1: never)");
   t.key("max_outlier_count", &c.max_outlier_count, "times a point may be an outlier before it is removed");
-  t.key("max_reprojection_px", &c.max_reprojection_px, "an observation's residual after BA above which its point is flagged [px]");
-  t.key("ba_fixed_keyframes", &c.ba_fixed_keyframes, "oldest keyframes held fixed in the keyframe BA (gauge and scale)");
+  t.key("max_reprojection_px", &c.max_reprojection_px,
+        "an observation's residual after BA above which its point is flagged [px]");
+  t.key("ba_fixed_keyframes", &c.ba_fixed_keyframes,
+        "oldest keyframes held fixed in the keyframe BA (gauge and scale)");
   t.key("ba_keyframe_sweeps", &c.ba_keyframe_sweeps, "subspace Gauss-Newton sweeps when a keyframe is inserted");
   t.key("ba_frame_sweeps", &c.ba_frame_sweeps, "subspace Gauss-Newton sweeps of the per-frame BA");
   t.key("ba_free_keyframes", &c.ba_free_keyframes, "newest keyframes optimized by the keyframe BA, with their points");
@@ -189,12 +200,14 @@ std::vector<Field> configTable(SystemConfig& c) {
         "rotation-compensated median parallax to the last keyframe that makes a keyframe [px]");
   t.key("keyframe_min_mapped_ratio", &c.keyframe_min_mapped_ratio,
         "fewer mapped tracks than this share also asks for a keyframe, [0, 1]");
-  t.key("max_step_depth_ratio", &c.max_step_depth_ratio, "a per-frame step longer than this x the scene depth is a failure");
+  t.key("max_step_depth_ratio", &c.max_step_depth_ratio,
+        "a per-frame step longer than this x the scene depth is a failure");
   t.key("reuse_radius_px", &c.reuse_radius_px,
         "map reuse: a new track this close to the projection of an old point takes it over [px]; 0 = off");
   t.key("reuse_occlusion_ratio", &c.reuse_occlusion_ratio,
         "an old point farther than this x the mapped depth around it is hidden, not reused");
-  t.key("reuse_fix_revived", &c.reuse_fix_revived, "revived dormant points stay fixed in BA (they anchor the older map)");
+  t.key("reuse_fix_revived", &c.reuse_fix_revived,
+        "revived dormant points stay fixed in BA (they anchor the older map)");
   t.key("reuse_dormant_per_frame", &c.reuse_dormant_per_frame,
         "dormant points checked per frame, round robin (bounds the cost)");
 
@@ -206,7 +219,8 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("max_keyframes", &r.max_keyframes, "keyframes indexed; the oldest are dropped");
   t.key("points_per_keyframe", &r.points_per_keyframe, "described map points kept per keyframe, spread over the image");
   t.key("query_points", &r.query_points, "tracks of a lost frame described, spread over the image");
-  t.key("candidates", &r.candidates, "best-voted keyframes (and orientations) tried per lost frame, besides the newest");
+  t.key("candidates", &r.candidates,
+        "best-voted keyframes (and orientations) tried per lost frame, besides the newest");
   t.key("patch_size", &r.patch_size, "BRIEF window at full resolution [px], odd >= 7");
   t.key("smoothing_sigma", &r.smoothing_sigma, "Gaussian smoothing before the BRIEF tests [px]");
   t.key("max_distance", &r.max_distance, "accepted Hamming distance (of 256)");
@@ -226,7 +240,8 @@ std::vector<Field> configTable(SystemConfig& c) {
            "nearer points are not meshed and nearer depths not fused (map units)");
   t.shared("max_depth", std::vector<double*>{&d.mesher.max_depth, &d.prune.max_depth, &tsdf.max_depth},
            "farther points are not meshed and farther depths not fused (map units)");
-  t.key("mesh_max_edge_px", &d.mesher.max_edge_px, "building a frame mesh: triangles with a longer edge are dropped [px]");
+  t.key("mesh_max_edge_px", &d.mesher.max_edge_px,
+        "building a frame mesh: triangles with a longer edge are dropped [px]");
   t.key("mesh_max_normal_angle_deg", &d.mesher.max_normal_angle_deg,
         "building: triangles seen more obliquely than this are dropped [deg]");
   t.key("mesh_max_inv_depth_jump", &d.mesher.max_inv_depth_jump,
@@ -234,7 +249,8 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("mesh_drop_unused_vertices", &d.mesher.drop_unused_vertices, "building: vertices in no triangle are removed");
   t.internal("mesh_jump_on_measured", &d.mesher.jump_on_measured,
              "no effect when a mesh is built (its measured and smoothed depths are still the same)");
-  t.key("max_edge_px", &d.prune.max_edge_px, "pruning after the smoothing: triangles with a longer edge are dropped [px]");
+  t.key("max_edge_px", &d.prune.max_edge_px,
+        "pruning after the smoothing: triangles with a longer edge are dropped [px]");
   t.key("max_normal_angle_deg", &d.prune.max_normal_angle_deg,
         "pruning: triangles seen more obliquely than this are dropped [deg]");
   t.key("max_inv_depth_jump", &d.prune.max_inv_depth_jump,
@@ -272,11 +288,13 @@ std::vector<Field> configTable(SystemConfig& c) {
 const std::vector<SectionInfo>& configSections() {
   // In the order of the table (and of describe() and docs/CONFIG.md).
   static const std::vector<SectionInfo> sections = {
-      {"tracker", "Dense curvature-extrema tracking: `tracking::TrackerConfig` (include/vitamin_e/tracking/dense_tracker.h)."},
+      {"tracker",
+       "Dense curvature-extrema tracking: `tracking::TrackerConfig` (include/vitamin_e/tracking/dense_tracker.h)."},
       {"init", "Two-view initialization: `geometry::TwoViewConfig` (include/vitamin_e/geometry/two_view.h)."},
       {"pnp", "Camera pose from P3P + RANSAC, refined with Geman-McClure: `geometry::PnpConfig` "
               "(include/vitamin_e/geometry/pnp.h)."},
-      {"triangulation", "New map points: `geometry::TriangulationConfig` (include/vitamin_e/geometry/triangulation.h)."},
+      {"triangulation",
+       "New map points: `geometry::TriangulationConfig` (include/vitamin_e/geometry/triangulation.h)."},
       {"ba", "Subspace Gauss-Newton bundle adjustment: `optimization::BaOptions` "
              "(include/vitamin_e/optimization/subspace_gn.h)."},
       {"map", "Keyframe window, point archive and dormant points: `map::MapConfig` (include/vitamin_e/map/map.h)."},

@@ -24,8 +24,8 @@ struct Field {
   std::string section;
   std::string key;
   std::string doc;
-  std::string internal;               // non-empty: not a yaml key
-  std::vector<const void*> members;   // what the row sets; the first is printed
+  std::string internal;                         // non-empty: not a yaml key
+  std::vector<const void*> members;             // what the row sets; the first is printed
   std::function<void(const YAML::Node&)> read;  // empty for internal rows
   std::function<std::string()> print;
 };

@@ -5,7 +5,9 @@
 namespace vitamin_e::pipeline {
 
 Localizer::Localizer(const SystemConfig& config)
-    : pnp_(config.pnp), min_inliers_(config.min_pose_inliers), min_inlier_ratio_(config.min_pose_inlier_ratio),
+    : pnp_(config.pnp),
+      min_inliers_(config.min_pose_inliers),
+      min_inlier_ratio_(config.min_pose_inlier_ratio),
       weak_max_step_ratio_(config.weak_pose_max_step_ratio) {}
 
 PoseEstimate Localizer::estimate(const FrameContext& frame, const Eigen::Isometry3d& guess,
@@ -59,8 +61,8 @@ PoseEstimate Localizer::solve(const std::vector<Eigen::Vector3d>& p_w, const std
   const geometry::PnpResult r = geometry::solvePnpRansac(p_w, xy, pnp_, &guess);
   e.num_inliers = r.num_inliers;
   if (!r.ok || r.num_inliers < min_inliers_) {
-    e.why = "pose estimation failed (" + std::to_string(r.num_inliers) + " inliers of " + std::to_string(p_w.size()) +
-            ")";
+    e.why =
+        "pose estimation failed (" + std::to_string(r.num_inliers) + " inliers of " + std::to_string(p_w.size()) + ")";
     return e;
   }
   // Tracks that survived a sudden change are often wrong: a pose only a minority

@@ -55,7 +55,9 @@ class TrackGrid {
 class DepthGrid {
  public:
   DepthGrid(int width, int height, int cell)
-      : cell_(cell), w_(width / cell + 1), h_(height / cell + 1),
+      : cell_(cell),
+        w_(width / cell + 1),
+        h_(height / cell + 1),
         depth_(static_cast<std::size_t>(w_ * h_), std::numeric_limits<double>::infinity()) {}
   void add(const Eigen::Vector2d& px, double z) {
     const int i = index(px);
@@ -78,8 +80,8 @@ class DepthGrid {
 struct Claim {
   double d2 = std::numeric_limits<double>::infinity();
   bool dormant = false;
-  std::uint64_t landmark_id = 0;    // active landmark (relabel)
-  std::size_t dormant_index = 0;    // dormant landmark (revive)
+  std::uint64_t landmark_id = 0;  // active landmark (relabel)
+  std::size_t dormant_index = 0;  // dormant landmark (revive)
 };
 
 }  // namespace
@@ -90,8 +92,8 @@ MapReuse::MapReuse(const SystemConfig& config, const camera::Camera& camera)
       dormant_per_frame_(static_cast<std::size_t>(config.reuse_dormant_per_frame)),
       camera_(camera) {}
 
-int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth,
-                        map::Map* map, bool all_dormant) {
+int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth, map::Map* map,
+                        bool all_dormant) {
   const double radius = radius_px_;
   const std::vector<FrameTrack>& tracks = frame.tracks;
   const std::vector<const map::Landmark*>& landmarks = frame.landmarks;

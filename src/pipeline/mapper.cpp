@@ -48,8 +48,7 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
   // ba_fixed_keyframes (gauge: pose and scale); with two keyframes only the
   // first is fixed.
   const int num_kf = static_cast<int>(kfs.size());
-  const int first_free =
-      std::max(std::min(config_.ba_fixed_keyframes, num_kf - 1), num_kf - config_.ba_free_keyframes);
+  const int first_free = std::max(std::min(config_.ba_fixed_keyframes, num_kf - 1), num_kf - config_.ba_free_keyframes);
   for (int k = 0; k < num_kf; ++k) {
     optimization::BaCamera c;
     c.T_w_c = kfs[k].T_w_c;

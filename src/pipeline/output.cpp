@@ -55,8 +55,8 @@ bool saveTrajectoryTum(const std::vector<TrajectoryEntry>& trajectory, const std
       std::snprintf(buf, sizeof(buf), "%.9f", e.timestamp);
       return std::string(buf);
     }() : e.timestamp_text;
-    std::snprintf(line, sizeof(line), " %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", t.x(), t.y(), t.z(), q.x(), q.y(),
-                  q.z(), q.w());
+    std::snprintf(line, sizeof(line), " %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", t.x(), t.y(), t.z(), q.x(), q.y(), q.z(),
+                  q.w());
     out << stamp << line;
   }
   out.flush();
@@ -74,8 +74,7 @@ bool saveMapPly(const std::vector<MapPoint3>& points, const std::string& path, s
       << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
   for (const MapPoint3& p : points) {
     if (!p.p_w.allFinite()) continue;
-    const float xyz[3] = {static_cast<float>(p.p_w.x()), static_cast<float>(p.p_w.y()),
-                          static_cast<float>(p.p_w.z())};
+    const float xyz[3] = {static_cast<float>(p.p_w.x()), static_cast<float>(p.p_w.y()), static_cast<float>(p.p_w.z())};
     const unsigned char rgb[3] = {p.intensity, p.intensity, p.intensity};
     out.write(reinterpret_cast<const char*>(xyz), sizeof(xyz));
     out.write(reinterpret_cast<const char*>(rgb), sizeof(rgb));

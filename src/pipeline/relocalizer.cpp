@@ -25,13 +25,8 @@ void RelocalizerConfig::validate() const {
   check(min_inlier_ratio > 0.0 && min_inlier_ratio <= 1.0, "min_inlier_ratio must be in (0, 1]");
 }
 
-Relocalizer::Relocalizer(const RelocalizerConfig& config, const camera::Camera& camera,
-                         const geometry::PnpConfig& pnp)
-    : config_(config),
-      camera_(camera),
-      pnp_(pnp),
-      brief_(config.patch_size),
-      brief_upside_down_(brief_.rotated(2)) {
+Relocalizer::Relocalizer(const RelocalizerConfig& config, const camera::Camera& camera, const geometry::PnpConfig& pnp)
+    : config_(config), camera_(camera), pnp_(pnp), brief_(config.patch_size), brief_upside_down_(brief_.rotated(2)) {
   config_.validate();
   // Disjoint bit sets for the tables, from a fixed shuffle of the 256 tests.
   std::array<int, 256> order;

@@ -234,8 +234,8 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
   if (r.ok && resume(frame, r.T_w_c, result)) {
     d.relocalization = "relocalized";
     ++counters.relocalizations;
-    result->message = "relocalized against keyframe " + std::to_string(r.keyframe) + " (" +
-                      std::to_string(r.inliers) + " of " + std::to_string(r.matches) + " matches" +
+    result->message = "relocalized against keyframe " + std::to_string(r.keyframe) + " (" + std::to_string(r.inliers) +
+                      " of " + std::to_string(r.matches) + " matches" +
                       (r.quarter_turns == 2 ? ", camera upside down" : "") + ")";
     return;
   }
@@ -338,16 +338,15 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
   // is a failure, not motion.
   const double step = (T_w_c.translation() - motion.lastPose().translation()).norm();
   if (!T_w_c.matrix().allFinite() || step > config.max_step_depth_ratio * scene_depth) {
-    lose(frame, "pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")",
-         false, result);
+    lose(frame, "pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")", false,
+         result);
     return;
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   motion.update(T_w_c);
   {
     ScopedTimer timer(&timings, "map", &result->timing_ms);
-    const KeyframeDecision decision =
-        localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
+    const KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
     d.keyframe_parallax_px = decision.parallax_px;
     if (decision.needed) {
       const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);

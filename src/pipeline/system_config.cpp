@@ -107,8 +107,10 @@ void SystemConfig::validate() const {
   check(init_min_disparity_px >= 0.0, "pipeline.init_min_disparity_px must be >= 0");
   check(init_max_pending_frames >= 2, "pipeline.init_max_pending_frames must be >= 2");
   check(min_pose_inliers >= 6, "pipeline.min_pose_inliers must be >= 6");
-  check(min_pose_inlier_ratio >= 0.0 && min_pose_inlier_ratio <= 1.0, "pipeline.min_pose_inlier_ratio must be in [0, 1]");
-  check(weak_pose_max_step_ratio >= 1.0, "pipeline.weak_pose_max_step_ratio must be >= 1 (1: weak poses are never kept)");
+  check(min_pose_inlier_ratio >= 0.0 && min_pose_inlier_ratio <= 1.0,
+        "pipeline.min_pose_inlier_ratio must be in [0, 1]");
+  check(weak_pose_max_step_ratio >= 1.0,
+        "pipeline.weak_pose_max_step_ratio must be >= 1 (1: weak poses are never kept)");
   check(max_outlier_count >= 1, "pipeline.max_outlier_count must be >= 1");
   check(max_reprojection_px > 0.0, "pipeline.max_reprojection_px must be > 0");
   check(ba_fixed_keyframes >= 1 && ba_fixed_keyframes < map.max_keyframes,

@@ -71,11 +71,11 @@ struct System::Impl {
   MotionModel motion;
   TrackingState state = TrackingState::kInitializing;
   bool initialized_once = false;
-  double scene_depth = 1.0;           // median depth of the map seen from the camera, map units
-  int lost_frames = 0;                // frames with features spent relocalizing since the loss
+  double scene_depth = 1.0;  // median depth of the map seen from the camera, map units
+  int lost_frames = 0;       // frames with features spent relocalizing since the loss
   // map persistence (system_map_io.cpp)
-  bool localization_only = false;     // the map is not changed (System::setLocalizationOnly)
-  bool map_loaded = false;            // the map came from loadMap() (a loss is then never given up)
+  bool localization_only = false;  // the map is not changed (System::setLocalizationOnly)
+  bool map_loaded = false;         // the map came from loadMap() (a loss is then never given up)
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
   std::vector<std::uint64_t> prev_mapped_ids;  // tracks with a map point at the end of the last tracked frame

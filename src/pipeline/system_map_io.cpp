@@ -62,10 +62,10 @@ void System::loadMap(const map::MapFileContents& c) {
   }
   const map::DescriptorSettings mine = s.relocalizer.descriptorSettings();
   if (c.descriptors.patch_size != mine.patch_size || c.descriptors.smoothing_sigma != mine.smoothing_sigma) {
-    throw std::invalid_argument(
-        "the map's keyframes were described with relocalization.patch_size " + std::to_string(c.descriptors.patch_size) +
-        " and smoothing_sigma " + std::to_string(c.descriptors.smoothing_sigma) + ", this configuration has " +
-        std::to_string(mine.patch_size) + " and " + std::to_string(mine.smoothing_sigma));
+    throw std::invalid_argument("the map's keyframes were described with relocalization.patch_size " +
+                                std::to_string(c.descriptors.patch_size) + " and smoothing_sigma " +
+                                std::to_string(c.descriptors.smoothing_sigma) + ", this configuration has " +
+                                std::to_string(mine.patch_size) + " and " + std::to_string(mine.smoothing_sigma));
   }
   if (c.keyframe_index.empty()) {
     throw std::invalid_argument("the map has no indexed keyframe: the camera could not be found in it");

@@ -44,7 +44,7 @@ struct BagDataset::Impl {
   std::string topic;
   rosbag::Bag bag;
   std::vector<rosbag::MessageInstance> messages;  // bag order
-  std::vector<BagFrame> frames;                     // sorted by header stamp
+  std::vector<BagFrame> frames;                   // sorted by header stamp
   vitamin_e::camera::CameraCalibration calibration;
 
   std::string frameName(std::size_t i) const {
@@ -111,8 +111,8 @@ BagDataset::BagDataset(const std::string& bag_path, const vitamin_e::io::Dataset
   const auto& cam = m.calibration.camera;
   if (first.cols != cam.width() || first.rows != cam.height()) {
     throw DatasetError("bag '" + bag_path + "' images are " + std::to_string(first.cols) + "x" +
-                       std::to_string(first.rows) + " but the calibration '" + options.calibration_path +
-                       "' is for " + std::to_string(cam.width()) + "x" + std::to_string(cam.height()));
+                       std::to_string(first.rows) + " but the calibration '" + options.calibration_path + "' is for " +
+                       std::to_string(cam.width()) + "x" + std::to_string(cam.height()));
   }
 }
 

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "vitamin_e/io/dataset.h"
 
@@ -89,8 +89,8 @@ bool toMono8(const sensor_msgs::Image& msg, cv::Mat* gray, std::string* error) {
   const std::size_t bytes_per_pixel = static_cast<std::size_t>(channels) * (cv_type == CV_16UC1 ? 2 : 1);
   if (msg.width == 0 || msg.height == 0 || msg.step < msg.width * bytes_per_pixel ||
       msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height) {
-    *error = "malformed image message (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) +
-             ", step " + std::to_string(msg.step) + ", " + std::to_string(msg.data.size()) + " bytes)";
+    *error = "malformed image message (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) + ", step " +
+             std::to_string(msg.step) + ", " + std::to_string(msg.data.size()) + " bytes)";
     return false;
   }
   const bool big_endian_host = false;
@@ -126,8 +126,8 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
   if (roi && (info.roi.x_offset + info.roi.width > info.width || info.roi.y_offset + info.roi.height > info.height)) {
     throw CalibrationError("camera_info: roi " + std::to_string(info.roi.width) + "x" +
                            std::to_string(info.roi.height) + "+" + std::to_string(info.roi.x_offset) + "+" +
-                           std::to_string(info.roi.y_offset) + " lies outside the " + std::to_string(info.width) +
-                           "x" + std::to_string(info.height) + " image");
+                           std::to_string(info.roi.y_offset) + " lies outside the " + std::to_string(info.width) + "x" +
+                           std::to_string(info.height) + " image");
   }
   const double full_w = roi ? info.roi.width : info.width;
   const double full_h = roi ? info.roi.height : info.height;
@@ -159,8 +159,8 @@ Camera cameraFromInfo(const sensor_msgs::CameraInfo& info, bool rectified) {
     // The core's radial-tangential model has k1 k2 p1 p2 k3: refuse what it would silently drop.
     for (std::size_t k = 5; k < d.size(); ++k) {
       if (d[k] != 0.0) {
-        throw CalibrationError("camera_info: " + m + " coefficient D[" + std::to_string(k) + "] = " +
-                               std::to_string(d[k]) +
+        throw CalibrationError("camera_info: " + m + " coefficient D[" + std::to_string(k) +
+                               "] = " + std::to_string(d[k]) +
                                " is not supported (only k1 k2 p1 p2 k3; the rational k4..k6 must be 0): "
                                "publish the rectified image (image_rect) or calibrate with plumb_bob");
       }
@@ -192,9 +192,9 @@ bool compressedToMono8(const sensor_msgs::CompressedImage& msg, cv::Mat* gray, s
   }
   cv::Mat decoded;
   try {
-    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(msg.data.size()), CV_8UC1,
-                                   const_cast<std::uint8_t*>(msg.data.data())),
-                           cv::IMREAD_UNCHANGED);
+    decoded =
+        cv::imdecode(cv::Mat(1, static_cast<int>(msg.data.size()), CV_8UC1, const_cast<std::uint8_t*>(msg.data.data())),
+                     cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
     decoded.release();
   }
@@ -228,14 +228,13 @@ void fillCloud(const std_msgs::Header& header, const std::vector<Eigen::Vector3f
   cloud->is_dense = true;
   cloud->is_bigendian = false;
   sensor_msgs::PointCloud2Modifier modifier(*cloud);
-  modifier.setPointCloud2Fields(4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1,
-                                sensor_msgs::PointField::FLOAT32, "z", 1, sensor_msgs::PointField::FLOAT32,
-                                "intensity", 1, sensor_msgs::PointField::FLOAT32);
+  modifier.setPointCloud2Fields(4, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32,
+                                "z", 1, sensor_msgs::PointField::FLOAT32, "intensity", 1,
+                                sensor_msgs::PointField::FLOAT32);
   modifier.resize(points.size());
   // The field iterators take data.front(): undefined behaviour on an empty cloud.
   if (points.empty()) return;
-  sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x"), y(*cloud, "y"), z(*cloud, "z"),
-      i(*cloud, "intensity");
+  sensor_msgs::PointCloud2Iterator<float> x(*cloud, "x"), y(*cloud, "y"), z(*cloud, "z"), i(*cloud, "intensity");
   const bool has_intensity = intensity.size() == points.size();
   for (std::size_t k = 0; k < points.size(); ++k, ++x, ++y, ++z, ++i) {
     *x = points[k].x();

@@ -46,8 +46,9 @@ Eigen::Isometry3d mapFromBase(const Eigen::Isometry3d& T_base_cam, const Eigen::
 
 Eigen::Matrix3d orientationAt(const std::vector<vitamin_e::pipeline::TrajectoryEntry>& trajectory, double t) {
   if (trajectory.empty()) return Eigen::Matrix3d::Identity();
-  auto later = std::lower_bound(trajectory.begin(), trajectory.end(), t,
-                                [](const vitamin_e::pipeline::TrajectoryEntry& e, double v) { return e.timestamp < v; });
+  auto later =
+      std::lower_bound(trajectory.begin(), trajectory.end(), t,
+                       [](const vitamin_e::pipeline::TrajectoryEntry& e, double v) { return e.timestamp < v; });
   if (later == trajectory.begin()) return later->T_w_c.rotation();
   if (later == trajectory.end()) return trajectory.back().T_w_c.rotation();
   const auto& a = *(later - 1);

@@ -21,8 +21,7 @@ std_msgs::ColorRGBA heightColor(float z, float z_min, float z_max) {
 }  // namespace
 
 std::size_t meshToMarkers(const vitamin_e::fusion::TriangleMesh& mesh, const MeshMarkerOptions& options,
-                          std::size_t previous_markers, visualization_msgs::MarkerArray* out,
-                          std::size_t* skipped) {
+                          std::size_t previous_markers, visualization_msgs::MarkerArray* out, std::size_t* skipped) {
   out->markers.clear();
   float z_min = std::numeric_limits<float>::max(), z_max = std::numeric_limits<float>::lowest();
   for (const auto& v : mesh.vertices) {

@@ -26,8 +26,8 @@ Health trackingHealth(const HealthInput& in) {
     raise(DS::WARN, "no image for " + std::to_string(static_cast<long>(in.since_input_s)) + " s");
   } else if (in.since_processed_s > 2.0) {
     // In bag mode a full queue holds the callback: no new image is seen, but frames wait.
-    raise(DS::ERROR, std::string(in.since_input_s > 2.0 ? "frames wait" : "images arrive") + " but none processed for " +
-                         std::to_string(static_cast<long>(in.since_processed_s)) + " s");
+    raise(DS::ERROR, std::string(in.since_input_s > 2.0 ? "frames wait" : "images arrive") +
+                         " but none processed for " + std::to_string(static_cast<long>(in.since_processed_s)) + " s");
   }
   if (in.state == vitamin_e::TrackingStatus::LOST) raise(DS::ERROR, "lost: " + in.message);
   if (in.state == vitamin_e::TrackingStatus::RELOCALIZING) raise(DS::WARN, "relocalizing: " + in.message);

@@ -13,8 +13,8 @@ namespace {
 const char* kSegment = "# segment ";
 }
 
-bool saveSegmentsTum(const std::vector<TrajectorySegment>& segments, const std::string& header,
-                     const std::string& path, std::string* error) {
+bool saveSegmentsTum(const std::vector<TrajectorySegment>& segments, const std::string& header, const std::string& path,
+                     std::string* error) {
   std::ofstream out(path);
   if (!out) {
     if (error) *error = "cannot write trajectory to '" + path + "': " + std::strerror(errno);

@@ -33,24 +33,31 @@ double profileIntegral(double u, double r) {
 
 void DrivePathConfig::validate() const {
   if (legs.empty()) throw std::invalid_argument("drive path: legs must not be empty");
-  if (!(start_speed >= 0.1 && start_speed <= 40.0)) throw std::invalid_argument("drive path: start_speed must be in [0.1, 40] m/s");
+  if (!(start_speed >= 0.1 && start_speed <= 40.0))
+    throw std::invalid_argument("drive path: start_speed must be in [0.1, 40] m/s");
   for (std::size_t i = 0; i < legs.size(); ++i) {
     const DriveLeg& l = legs[i];
     const std::string at = "drive path: leg " + std::to_string(i) + ": ";
     if (!(l.length_m > 0.0 && l.length_m <= 5000.0)) throw std::invalid_argument(at + "length_m must be in (0, 5000]");
-    if (!(l.end_speed >= 0.1 && l.end_speed <= 40.0)) throw std::invalid_argument(at + "end_speed must be in [0.1, 40] m/s");
+    if (!(l.end_speed >= 0.1 && l.end_speed <= 40.0))
+      throw std::invalid_argument(at + "end_speed must be in [0.1, 40] m/s");
     if (l.kind == DriveLeg::Kind::kTurn) {
-      if (!(std::abs(l.turn_rad) > 0.0 && std::abs(l.turn_rad) <= M_PI)) throw std::invalid_argument(at + "turn_rad must be in [-pi, pi], not 0");
-      if (!(l.ramp_fraction > 0.0 && l.ramp_fraction <= 0.5)) throw std::invalid_argument(at + "ramp_fraction must be in (0, 0.5]");
+      if (!(std::abs(l.turn_rad) > 0.0 && std::abs(l.turn_rad) <= M_PI))
+        throw std::invalid_argument(at + "turn_rad must be in [-pi, pi], not 0");
+      if (!(l.ramp_fraction > 0.0 && l.ramp_fraction <= 0.5))
+        throw std::invalid_argument(at + "ramp_fraction must be in (0, 0.5]");
     } else if (l.turn_rad != 0.0) {
       throw std::invalid_argument(at + "a straight leg has turn_rad 0");
     }
   }
-  if (!(camera_height > 0.2 && camera_height < 10.0)) throw std::invalid_argument("drive path: camera_height must be in (0.2, 10) m");
-  if (!(std::abs(pitch0) + pitch_amp < 0.5)) throw std::invalid_argument("drive path: pitch0 + pitch_amp must stay below 0.5 rad");
+  if (!(camera_height > 0.2 && camera_height < 10.0))
+    throw std::invalid_argument("drive path: camera_height must be in (0.2, 10) m");
+  if (!(std::abs(pitch0) + pitch_amp < 0.5))
+    throw std::invalid_argument("drive path: pitch0 + pitch_amp must stay below 0.5 rad");
   if (!(pitch_amp >= 0.0 && roll_amp >= 0.0 && roll_amp < 0.2 && height_amp >= 0.0 && height_amp < 0.5))
     throw std::invalid_argument("drive path: wobble amplitudes must be >= 0 (roll < 0.2 rad, height < 0.5 m)");
-  if (!std::isfinite(heading0) || !start.allFinite()) throw std::invalid_argument("drive path: start and heading0 must be finite");
+  if (!std::isfinite(heading0) || !start.allFinite())
+    throw std::invalid_argument("drive path: start and heading0 must be finite");
 }
 
 DrivePath::DrivePath(const DrivePathConfig& config) : config_(config) {
@@ -66,7 +73,10 @@ DrivePath::DrivePath(const DrivePathConfig& config) : config_(config) {
   ds_ = length_ / n;
   curve_.resize(n + 1);
   curve_[0] = config_.start;
-  auto tangent = [this](double at) { const double h = headingAt(at); return Eigen::Vector2d(std::cos(h), std::sin(h)); };
+  auto tangent = [this](double at) {
+    const double h = headingAt(at);
+    return Eigen::Vector2d(std::cos(h), std::sin(h));
+  };
   for (int i = 0; i < n; ++i) {
     const double a = i * ds_;
     curve_[i + 1] = curve_[i] + ds_ / 6.0 * (tangent(a) + 4.0 * tangent(a + 0.5 * ds_) + tangent(a + ds_));
@@ -144,7 +154,8 @@ double DrivePath::arcLength(double t) const {
   const double s0 = s_of_t_[i], s1 = s_of_t_[i + 1];
   const double m0 = dt_ * speedAt(s0), m1 = dt_ * speedAt(s1);
   const double a2 = a * a, a3 = a2 * a;
-  return std::min(length_, (2 * a3 - 3 * a2 + 1) * s0 + (a3 - 2 * a2 + a) * m0 + (-2 * a3 + 3 * a2) * s1 + (a3 - a2) * m1);
+  return std::min(length_,
+                  (2 * a3 - 3 * a2 + 1) * s0 + (a3 - 2 * a2 + a) * m0 + (-2 * a3 + 3 * a2) * s1 + (a3 - a2) * m1);
 }
 
 double DrivePath::timeAtArcLength(double s) const {
@@ -169,7 +180,8 @@ Eigen::Vector3d DrivePath::position(double t) const {
   const double s = arcLength(t);
   const Eigen::Vector2d g = groundAt(s);
   // Road unevenness: spatial wavelengths (7.3, 11.1, 4.7 m), so a car at rest does not bob.
-  return Eigen::Vector3d(g.x(), g.y(), config_.camera_height + config_.height_amp * std::sin(2.0 * M_PI * s / 4.7 + 0.4));
+  return Eigen::Vector3d(g.x(), g.y(),
+                         config_.camera_height + config_.height_amp * std::sin(2.0 * M_PI * s / 4.7 + 0.4));
 }
 
 Eigen::Isometry3d DrivePath::T_w_c(double t) const {
@@ -201,14 +213,16 @@ std::string DrivePath::toJson() const {
   o.precision(9);
   o << "{\"kind\": \"drive\", \"name\": \"" << config_.name << "\", \"start\": [" << config_.start.x() << ", "
     << config_.start.y() << "], \"heading0\": " << config_.heading0 << ", \"start_speed_m_s\": " << config_.start_speed
-    << ", \"length_m\": " << length_ << ", \"duration_s\": " << duration_ << ", \"camera_height_m\": "
-    << config_.camera_height << ", \"pitch0\": " << config_.pitch0 << ", \"pitch_amp\": " << config_.pitch_amp
-    << ", \"roll_amp\": " << config_.roll_amp << ", \"height_amp_m\": " << config_.height_amp << ",\n  \"legs\": [";
+    << ", \"length_m\": " << length_ << ", \"duration_s\": " << duration_
+    << ", \"camera_height_m\": " << config_.camera_height << ", \"pitch0\": " << config_.pitch0
+    << ", \"pitch_amp\": " << config_.pitch_amp << ", \"roll_amp\": " << config_.roll_amp
+    << ", \"height_amp_m\": " << config_.height_amp << ",\n  \"legs\": [";
   for (std::size_t i = 0; i < config_.legs.size(); ++i) {
     const DriveLeg& l = config_.legs[i];
     o << (i ? ", " : "") << "{\"kind\": \"" << (l.kind == DriveLeg::Kind::kTurn ? "turn" : "straight")
       << "\", \"length_m\": " << l.length_m << ", \"end_speed_m_s\": " << l.end_speed;
-    if (l.kind == DriveLeg::Kind::kTurn) o << ", \"turn_deg\": " << l.turn_rad / kDeg << ", \"ramp_fraction\": " << l.ramp_fraction;
+    if (l.kind == DriveLeg::Kind::kTurn)
+      o << ", \"turn_deg\": " << l.turn_rad / kDeg << ", \"ramp_fraction\": " << l.ramp_fraction;
     o << "}";
   }
   o << "]}";
@@ -247,7 +261,7 @@ DrivePathConfig makeDrivePathConfig(const std::string& name) {
     c.legs = {straight(60.0, 15.0), straight(45.0, 15.0)};
   } else if (name == "drive") {
     c.start_speed = 3.0;
-    c.legs = {straight(15.0, 2.0), turn(90.0, 2.0),   straight(30.0, 8.5), straight(40.0, 8.5),
+    c.legs = {straight(15.0, 2.0), turn(90.0, 2.0),  straight(30.0, 8.5), straight(40.0, 8.5),
               straight(20.0, 2.0), turn(-90.0, 2.0), straight(15.0, 4.0)};
   } else {
     std::string names;

@@ -19,7 +19,8 @@ Renderer::Renderer(const Scene& scene, const camera::Camera& camera, int supersa
     for (int u = 0; u < w; ++u) {
       Eigen::Vector3d b;
       if (!camera_.unproject(Eigen::Vector2d(u, v), &b))
-        throw std::invalid_argument("renderer: cannot unproject pixel (" + std::to_string(u) + ", " + std::to_string(v) + ")");
+        throw std::invalid_argument("renderer: cannot unproject pixel (" + std::to_string(u) + ", " +
+                                    std::to_string(v) + ")");
       centre[static_cast<std::size_t>(v) * w + u] = b;
       for (int i = 0; i < ss_; ++i) {
         for (int j = 0; j < ss_; ++j) {
@@ -44,7 +45,8 @@ Renderer::Renderer(const Scene& scene, const camera::Camera& camera, int supersa
       auto for_rays = [&](auto&& fn) {
         for (int v = ty * kTile; v < std::min(h, (ty + 1) * kTile); ++v)
           for (int u = tx * kTile; u < std::min(w, (tx + 1) * kTile); ++u)
-            for (int k = 0; k < n; ++k) fn(rays_c_[(static_cast<std::size_t>(v) * w + u) * n + k].template cast<double>());
+            for (int k = 0; k < n; ++k)
+              fn(rays_c_[(static_cast<std::size_t>(v) * w + u) * n + k].template cast<double>());
       };
       for_rays([&](const Eigen::Vector3d& r) { axis += r; });
       axis.normalize();

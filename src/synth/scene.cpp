@@ -86,7 +86,8 @@ Scene Scene::makeRoom(const SceneConfig& config, const std::vector<Eigen::Vector
 Scene Scene::fromBoxes(std::vector<SceneBox> boxes, float sky_intensity, const SceneConfig& config,
                        const std::string& extra_json) {
   if (boxes.empty()) throw std::invalid_argument("scene: no boxes");
-  if (!(sky_intensity >= 0.0f && sky_intensity <= 1.0f)) throw std::invalid_argument("scene: sky intensity must be in [0, 1]");
+  if (!(sky_intensity >= 0.0f && sky_intensity <= 1.0f))
+    throw std::invalid_argument("scene: sky intensity must be in [0, 1]");
   Scene s;
   s.config_ = config;
   s.has_room_ = false;
@@ -107,7 +108,8 @@ Scene Scene::fromBoxes(std::vector<SceneBox> boxes, float sky_intensity, const S
       for (int side = 0; side < 2; ++side) {
         SceneBox::Surface& surface = sb.faces[2 * axis + side];
         if (surface.texture.width() == 0)
-          throw std::invalid_argument("scene: box " + std::to_string(k) + " (" + sb.kind + ") has a face without texture");
+          throw std::invalid_argument("scene: box " + std::to_string(k) + " (" + sb.kind +
+                                      ") has a face without texture");
         Face f;
         f.axis = axis;
         f.u_axis = (axis + 1) % 3;
@@ -248,8 +250,8 @@ bool Scene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, RayHit
   return finishHit(o, d, best, best_face, hit);
 }
 
-bool Scene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, RayHit* hit,
-                      const std::vector<int>& box_list, const std::vector<double>& near_dist) const {
+bool Scene::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, RayHit* hit, const std::vector<int>& box_list,
+                      const std::vector<double>& near_dist) const {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   int best_face = -1;
   double inv[3];
@@ -310,8 +312,8 @@ std::string Scene::toJson() const {
       o << (k ? ", " : "") << "{\"min\": " << vec(boxes_[k].min) << ", \"max\": " << vec(boxes_[k].max) << "}";
   } else {
     // An open scene: no room (rays that miss every box see the sky).
-    o << ", \"sky_intensity\": " << sky_ << ",\n \"bounds\": {\"min\": " << vec(room_.min) << ", \"max\": " << vec(room_.max)
-      << "},\n";
+    o << ", \"sky_intensity\": " << sky_ << ",\n \"bounds\": {\"min\": " << vec(room_.min)
+      << ", \"max\": " << vec(room_.max) << "},\n";
     if (!extra_json_.empty()) o << " " << extra_json_.substr(1, extra_json_.size() - 2) << ",\n";
     o << " \"boxes\": [";
     for (std::size_t k = 0; k < boxes_.size(); ++k)

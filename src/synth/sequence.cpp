@@ -18,7 +18,8 @@ namespace vitamin_e::synth {
 namespace fs = std::filesystem;
 
 void SequenceConfig::validate() const {
-  if (scene != "room" && scene != "street") throw std::invalid_argument("scene must be room or street, got '" + scene + "'");
+  if (scene != "room" && scene != "street")
+    throw std::invalid_argument("scene must be room or street, got '" + scene + "'");
   if (scene == "street") {
     if (frames < 0) throw std::invalid_argument("frames must be >= 0 (0: the whole path)");
     if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) throw std::invalid_argument("rate_hz must be in (0, 1000]");
@@ -90,7 +91,8 @@ int streetSequenceFrames(const SequenceConfig& config, const DrivePath& path) {
   const int whole = static_cast<int>(std::floor(path.duration() * config.rate_hz + 1e-9)) + 1;
   if (config.frames > whole)
     throw std::invalid_argument("frames: path '" + config.path + "' lasts " + std::to_string(path.duration()) +
-                                " s: at most " + std::to_string(whole) + " frames at " + std::to_string(config.rate_hz) + " Hz");
+                                " s: at most " + std::to_string(whole) + " frames at " +
+                                std::to_string(config.rate_hz) + " Hz");
   return config.frames > 0 ? config.frames : whole;
 }
 
@@ -156,7 +158,7 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
   config.validate();
   SequenceStats stats;
   const fs::path out(out_dir), cam_dir = out / "mav0" / "cam0", img_dir = cam_dir / "data",
-      gt_dir = out / "mav0" / "state_groundtruth_estimate0";
+                               gt_dir = out / "mav0" / "state_groundtruth_estimate0";
   std::error_code ec;
   fs::create_directories(img_dir, ec);
   fs::create_directories(gt_dir, ec);
@@ -204,7 +206,8 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
     render_ms += elapsedMs(t0);
     const auto t1 = TimingClock::now();
     const std::string name = std::to_string(ns) + ".png";
-    if (!cv::imwrite((img_dir / name).string(), img)) throw std::runtime_error((img_dir / name).string() + ": cannot write");
+    if (!cv::imwrite((img_dir / name).string(), img))
+      throw std::runtime_error((img_dir / name).string() + ": cannot write");
     write_ms += elapsedMs(t1);
 
     csv << ns << "," << name << "\n";
@@ -225,26 +228,24 @@ SequenceStats writeSequence(const std::string& out_dir, const SequenceConfig& co
   js.precision(12);
   js << "{\"generator\": \"vitamin_e_make_sequence\", ";
   if (street) js << "\"scene\": \"street\", ";
-  js << "\"n_frames\": " << frames
-     << ", \"rate_hz\": " << config.rate_hz << ", \"first_frame_ns\": " << frameTimestampNs(config, 0)
-     << ", \"last_frame_ns\": " << frameTimestampNs(config, frames - 1) << ",\n \"camera\": {\"width\": "
-     << cam.width() << ", \"height\": " << cam.height() << ", \"K\": [" << cam.fx() << ", " << cam.fy() << ", "
-     << cam.cx() << ", " << cam.cy() << "], \"distortion_model\": \"" << camera::toString(cam.model())
-     << "\", \"distortion\": [";
+  js << "\"n_frames\": " << frames << ", \"rate_hz\": " << config.rate_hz
+     << ", \"first_frame_ns\": " << frameTimestampNs(config, 0)
+     << ", \"last_frame_ns\": " << frameTimestampNs(config, frames - 1) << ",\n \"camera\": {\"width\": " << cam.width()
+     << ", \"height\": " << cam.height() << ", \"K\": [" << cam.fx() << ", " << cam.fy() << ", " << cam.cx() << ", "
+     << cam.cy() << "], \"distortion_model\": \"" << camera::toString(cam.model()) << "\", \"distortion\": [";
   for (std::size_t k = 0; k < cam.distortion().size(); ++k) js << (k ? ", " : "") << cam.distortion()[k];
   js << "], \"T_B_C\": \"identity\"},\n \"path\": ";
   if (street) {
     js << drive_path->toJson();
   } else {
     const CameraPathConfig& pc = room_path->config();
-    js << "{\"kind\": \"figure-eight\", \"center\": [" << pc.center.x() << ", "
-       << pc.center.y() << ", " << pc.center.z() << "], \"radius_x\": " << pc.radius_x << ", \"radius_y\": "
-       << pc.radius_y << ", \"height_amp\": " << pc.height_amp << ", \"speed_m_s\": " << pc.speed
-       << ", \"heading0\": " << pc.heading0 << ", \"heading_rate\": " << pc.heading_rate << "}";
+    js << "{\"kind\": \"figure-eight\", \"center\": [" << pc.center.x() << ", " << pc.center.y() << ", "
+       << pc.center.z() << "], \"radius_x\": " << pc.radius_x << ", \"radius_y\": " << pc.radius_y
+       << ", \"height_amp\": " << pc.height_amp << ", \"speed_m_s\": " << pc.speed << ", \"heading0\": " << pc.heading0
+       << ", \"heading_rate\": " << pc.heading_rate << "}";
   }
-  js << ",\n \"render\": {\"supersample\": "
-     << config.supersample << ", \"mip_filtering\": true, \"noise_sigma\": " << config.noise_sigma
-     << "},\n";
+  js << ",\n \"render\": {\"supersample\": " << config.supersample
+     << ", \"mip_filtering\": true, \"noise_sigma\": " << config.noise_sigma << "},\n";
   // The scene's fields (seed, room, boxes, faces) at the top level, as in the shared renderer's scene.json.
   const std::string scene_json = scene.toJson();
   js << " " << scene_json.substr(1, scene_json.size() - 2) << "}\n";

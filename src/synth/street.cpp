@@ -12,7 +12,7 @@ namespace vitamin_e::synth {
 
 namespace {
 
-constexpr double kSlabBottom = -0.3;  // road and sidewalk slabs reach down to here
+constexpr double kSlabBottom = -0.3;   // road and sidewalk slabs reach down to here
 constexpr double kCarHalfWidth = 0.9;  // the path's car must stay this far inside the road
 
 enum class CellKind { kBlock, kStreetX, kStreetY, kIntersection };
@@ -29,10 +29,10 @@ enum class ItemKind { kBuilding, kCar, kRoad, kIntersection, kSidewalk };
 struct Item {
   AxisBox box;
   ItemKind kind = ItemKind::kBuilding;
-  int along = 0;          // roads, sidewalks, cars: the axis of the street
+  int along = 0;                        // roads, sidewalks, cars: the axis of the street
   bool zebra0 = false, zebra1 = false;  // roads: crossings at the min / max end
-  double body = 0.5;      // cars: body intensity
-  int front_side = 1;     // cars: the end face (0: min, 1: max) that is the front
+  double body = 0.5;                    // cars: body intensity
+  int front_side = 1;                   // cars: the end face (0: min, 1: max) that is the front
 };
 
 const char* kindName(ItemKind k) {
@@ -100,21 +100,27 @@ void StreetConfig::validate() const {
   positive(margin_m, "margin_m");
   positive(ring_depth_m, "ring_depth_m");
   positive(texel_m, "texel_m");
-  if (!(road_width_m >= 6.0)) throw std::invalid_argument("street: road_width_m must be >= 6 (two lanes and parked cars)");
+  if (!(road_width_m >= 6.0))
+    throw std::invalid_argument("street: road_width_m must be >= 6 (two lanes and parked cars)");
   if (!(std::abs(lane_offset_m) + kCarHalfWidth < 0.5 * road_width_m))
     throw std::invalid_argument("street: lane_offset_m must keep the car on the road");
   if (!(block_max_m >= block_min_m)) throw std::invalid_argument("street: block_max_m must be >= block_min_m");
   if (!(block_min_m >= road_width_m + 2.0 * sidewalk_width_m + 10.0))
     throw std::invalid_argument("street: block_min_m must leave at least 10 m of buildings between streets");
-  if (!(building_width_max_m >= building_width_min_m)) throw std::invalid_argument("street: building_width_max_m must be >= building_width_min_m");
+  if (!(building_width_max_m >= building_width_min_m))
+    throw std::invalid_argument("street: building_width_max_m must be >= building_width_min_m");
   if (!(building_height_max_m >= building_height_min_m && building_height_min_m > 3.0))
     throw std::invalid_argument("street: building heights must be > 3 m, max >= min");
-  if (!(parking_probability >= 0.0 && parking_probability <= 1.0)) throw std::invalid_argument("street: parking_probability must be in [0, 1]");
-  if (!(margin_m >= ring_depth_m + 20.0)) throw std::invalid_argument("street: margin_m must exceed ring_depth_m by 20 m");
+  if (!(parking_probability >= 0.0 && parking_probability <= 1.0))
+    throw std::invalid_argument("street: parking_probability must be in [0, 1]");
+  if (!(margin_m >= ring_depth_m + 20.0))
+    throw std::invalid_argument("street: margin_m must exceed ring_depth_m by 20 m");
   if (!(car_clearance_m >= 0.0)) throw std::invalid_argument("street: car_clearance_m must be >= 0");
   if (!(texel_m >= 0.001 && texel_m <= 0.2)) throw std::invalid_argument("street: texel_m must be in [0.001, 0.2]");
-  if (!(texel_per_m >= 0.0 && max_texel_m >= texel_m)) throw std::invalid_argument("street: texel_per_m must be >= 0, max_texel_m >= texel_m");
-  if (!(sky_intensity >= 0.0 && sky_intensity <= 1.0)) throw std::invalid_argument("street: sky_intensity must be in [0, 1]");
+  if (!(texel_per_m >= 0.0 && max_texel_m >= texel_m))
+    throw std::invalid_argument("street: texel_per_m must be >= 0, max_texel_m >= texel_m");
+  if (!(sky_intensity >= 0.0 && sky_intensity <= 1.0))
+    throw std::invalid_argument("street: sky_intensity must be in [0, 1]");
 }
 
 StreetLayout makeStreetLayout(const StreetConfig& cfg, const DrivePath& path) {
@@ -151,11 +157,13 @@ StreetLayout makeStreetLayout(const StreetConfig& cfg, const DrivePath& path) {
       if (gap < 0.01) {
         merged = true;
       } else if (gap < 2.0 * half_total + cfg.block_min_m) {
-        throw std::invalid_argument("street: two streets of path '" + path.config().name + "' are " + std::to_string(gap) +
-                                    " m apart (at least " + std::to_string(2.0 * half_total + cfg.block_min_m) + " needed)");
+        throw std::invalid_argument("street: two streets of path '" + path.config().name + "' are " +
+                                    std::to_string(gap) + " m apart (at least " +
+                                    std::to_string(2.0 * half_total + cfg.block_min_m) + " needed)");
       }
     }
-    if (!merged) L.streets.push_back({axis, offset, L.min[axis] + cfg.ring_depth_m, L.max[axis] - cfg.ring_depth_m, true});
+    if (!merged)
+      L.streets.push_back({axis, offset, L.min[axis] + cfg.ring_depth_m, L.max[axis] - cfg.ring_depth_m, true});
   }
   // Side streets at random spacing, clear of the path's streets and the ring.
   Rng rng(mixSeed(cfg.seed, 0x57EE7));
@@ -175,11 +183,13 @@ StreetLayout makeStreetLayout(const StreetConfig& cfg, const DrivePath& path) {
     for (std::size_t g = 0; g < anchors.size(); ++g) {
       const bool soft_lo = g == 0;
       const double upper = g + 1 < anchors.size() ? anchors[g + 1] - cfg.block_min_m : hi_p;
-      double x = soft_lo ? lo_p + rng.uniform(0.0, cfg.block_min_m) : anchors[g] + rng.uniform(cfg.block_min_m, cfg.block_max_m);
+      double x = soft_lo ? lo_p + rng.uniform(0.0, cfg.block_min_m)
+                         : anchors[g] + rng.uniform(cfg.block_min_m, cfg.block_max_m);
       for (; x <= upper; x += rng.uniform(cfg.block_min_m, cfg.block_max_m))
         if (x >= lo_p && x <= hi_p) added.push_back(x);
     }
-    for (const double x : added) L.streets.push_back({axis, x, L.min[axis] + cfg.ring_depth_m, L.max[axis] - cfg.ring_depth_m, false});
+    for (const double x : added)
+      L.streets.push_back({axis, x, L.min[axis] + cfg.ring_depth_m, L.max[axis] - cfg.ring_depth_m, false});
   }
   return L;
 }
@@ -277,9 +287,7 @@ Scene makeStreetScene(const StreetConfig& cfg, const DrivePath& path) {
       };
       Item road = slab(ItemKind::kRoad, st.offset - 0.5 * W, st.offset + 0.5 * W, 0.0);
       // Zebra crossings where the segment meets an intersection.
-      auto probe = [&](double along) {
-        return a == 0 ? town.cellAt(along, st.offset) : town.cellAt(st.offset, along);
-      };
+      auto probe = [&](double along) { return a == 0 ? town.cellAt(along, st.offset) : town.cellAt(st.offset, along); };
       const Cell* before = probe(a0 - 1.0);
       const Cell* after = probe(a1 + 1.0);
       road.zebra0 = before && before->kind == CellKind::kIntersection;
@@ -427,8 +435,9 @@ Scene makeStreetScene(const StreetConfig& cfg, const DrivePath& path) {
                                     : detail::flatTexture(0.3f);
             break;
           case ItemKind::kSidewalk:
-            img = !vertical ? (side ? detail::sidewalkTexture(along_m, across_m, texel, &rng) : detail::flatTexture(0.3f))
-                            : detail::kerbTexture(along_m, across_m, texel, &rng);
+            img = !vertical
+                      ? (side ? detail::sidewalkTexture(along_m, across_m, texel, &rng) : detail::flatTexture(0.3f))
+                      : detail::kerbTexture(along_m, across_m, texel, &rng);
             break;
         }
         if (img.rows == 2 && img.cols == 2) {
@@ -444,14 +453,15 @@ Scene makeStreetScene(const StreetConfig& cfg, const DrivePath& path) {
 
   std::ostringstream js;
   js.precision(9);
-  js << "{\"street\": {\"road_width_m\": " << W << ", \"sidewalk_width_m\": " << S << ", \"kerb_height_m\": "
-     << cfg.kerb_height_m << ", \"lane_offset_m\": " << cfg.lane_offset_m << ", \"extent\": {\"min\": [" << L.min.x()
-     << ", " << L.min.y() << "], \"max\": [" << L.max.x() << ", " << L.max.y() << "]}, \"buildings\": " << n_buildings
-     << ", \"cars\": " << n_cars << ",\n  \"streets\": [";
+  js << "{\"street\": {\"road_width_m\": " << W << ", \"sidewalk_width_m\": " << S
+     << ", \"kerb_height_m\": " << cfg.kerb_height_m << ", \"lane_offset_m\": " << cfg.lane_offset_m
+     << ", \"extent\": {\"min\": [" << L.min.x() << ", " << L.min.y() << "], \"max\": [" << L.max.x() << ", "
+     << L.max.y() << "]}, \"buildings\": " << n_buildings << ", \"cars\": " << n_cars << ",\n  \"streets\": [";
   for (std::size_t k = 0; k < L.streets.size(); ++k) {
     const Street& st = L.streets[k];
     js << (k ? ", " : "") << "{\"along\": \"" << (st.axis == 0 ? "x" : "y") << "\", \"offset\": " << st.offset
-       << ", \"from\": " << st.from << ", \"to\": " << st.to << ", \"on_path\": " << (st.on_path ? "true" : "false") << "}";
+       << ", \"from\": " << st.from << ", \"to\": " << st.to << ", \"on_path\": " << (st.on_path ? "true" : "false")
+       << "}";
   }
   js << "]}}";
   SceneConfig sc;

@@ -74,7 +74,9 @@ double glassValue(Rng* rng) { return rng->uniform() < 0.2 ? rng->uniform(0.45, 0
 
 }  // namespace
 
-int texels(double extent_m, double texel_m) { return std::max(2, static_cast<int>(std::ceil(extent_m / texel_m - 1e-9))); }
+int texels(double extent_m, double texel_m) {
+  return std::max(2, static_cast<int>(std::ceil(extent_m / texel_m - 1e-9)));
+}
 
 cv::Mat flatTexture(float value) { return cv::Mat(2, 2, CV_32FC1, cv::Scalar(value)); }
 
@@ -155,10 +157,11 @@ cv::Mat facadeTexture(double width_m, double height_m, double texel_m, Rng* rng)
         if (unit < 2.5) break;
         const double glass = glassValue(rng) * 0.8;
         c.fill(x, 0.35, x + unit - 1.5, ground_h - 0.95, frame_v);
-        c.gradient(x + 0.08, 0.43, x + unit - 1.58, ground_h - 1.03, glass, rng->uniform(-0.06, 0.06), rng->uniform(-0.1, 0.1));
+        c.gradient(x + 0.08, 0.43, x + unit - 1.58, ground_h - 1.03, glass, rng->uniform(-0.06, 0.06),
+                   rng->uniform(-0.1, 0.1));
         pane(x + 0.08, 0.43, x + unit - 1.58, ground_h - 1.03);
         c.fill(x + unit - 1.35, 0.0, x + unit - 0.25, 2.25, rng->uniform(0.12, 0.5));  // door
-        c.fill(x + unit - 0.45, 1.0, x + unit - 0.38, 1.15, 0.85);                      // handle
+        c.fill(x + unit - 0.45, 1.0, x + unit - 0.38, 1.15, 0.85);                     // handle
         // The sign: a band with "letters" of a contrasting intensity.
         const double sign_v = rng->uniform(0.1, 0.9);
         const double z0 = ground_h - 0.85, z1 = ground_h - 0.3;
@@ -211,7 +214,8 @@ cv::Mat carSideTexture(double length_m, double height_m, double texel_m, double 
   const double seam_v = std::max(0.03, body - 0.25);
   for (const double xs : {0.28 * length_m, b_pillar, 0.72 * length_m}) c.fill(xs - 0.01, 0.3, xs + 0.01, z_win, seam_v);
   c.fill(0.1, 0.5 * height_m, length_m - 0.1, 0.5 * height_m + 0.02, std::min(0.95, body + 0.12));  // crease
-  for (const double xs : {0.28 * length_m, b_pillar}) c.fill(xs + 0.12, 0.58 * height_m - 0.05, xs + 0.28, 0.58 * height_m - 0.02, 0.7);
+  for (const double xs : {0.28 * length_m, b_pillar})
+    c.fill(xs + 0.12, 0.58 * height_m - 0.05, xs + 0.28, 0.58 * height_m - 0.02, 0.7);
   c.fill(0.0, 0.0, length_m, 0.22, 0.07);  // under the body
   const double wheel_r = rng->uniform(0.29, 0.34), rim_v = rng->uniform(0.35, 0.75);
   for (const double xw : {0.82, length_m - 0.85}) {
@@ -268,7 +272,8 @@ cv::Mat roadTexture(double length_m, double width_m, double texel_m, bool markin
   if (markings) {
     // Dashed centre line: 3 m dashes, 6 m gaps, worn.
     const double phase = rng->uniform(0.0, 9.0);
-    for (double x = -phase; x < length_m; x += 9.0) c.fill(x, 0.5 * width_m - 0.06, x + 3.0, 0.5 * width_m + 0.06, 0.82);
+    for (double x = -phase; x < length_m; x += 9.0)
+      c.fill(x, 0.5 * width_m - 0.06, x + 3.0, 0.5 * width_m + 0.06, 0.82);
     // Manholes in the lanes.
     for (double x = rng->uniform(3.0, 25.0); x < length_m - 1.0; x += rng->uniform(15.0, 40.0)) {
       const double y = 0.5 * width_m + (rng->uniform() < 0.5 ? -1.0 : 1.0) * rng->uniform(1.0, 2.0);

@@ -45,8 +45,10 @@ void addValueNoise(cv::Mat* dst, double wavelength_px, double amplitude, Rng* rn
   cv::Mat up;
   cv::resize(grid, up, cv::Size(static_cast<int>(gw * wavelength_px), static_cast<int>(gh * wavelength_px)), 0, 0,
              cv::INTER_CUBIC);
-  const int ox = static_cast<int>(rng->uniform(wavelength_px, std::max(wavelength_px + 1.0, up.cols - dst->cols - wavelength_px)));
-  const int oy = static_cast<int>(rng->uniform(wavelength_px, std::max(wavelength_px + 1.0, up.rows - dst->rows - wavelength_px)));
+  const int ox =
+      static_cast<int>(rng->uniform(wavelength_px, std::max(wavelength_px + 1.0, up.cols - dst->cols - wavelength_px)));
+  const int oy =
+      static_cast<int>(rng->uniform(wavelength_px, std::max(wavelength_px + 1.0, up.rows - dst->rows - wavelength_px)));
   const int x0 = std::clamp(ox, 0, up.cols - dst->cols), y0 = std::clamp(oy, 0, up.rows - dst->rows);
   cv::scaleAdd(up(cv::Rect(x0, y0, dst->cols, dst->rows)), amplitude, *dst, *dst);
 }

@@ -52,8 +52,8 @@ bool irlsStep(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Ve
 }  // namespace
 
 AffineFit refineAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
-                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0,
-                                   const AffineFitConfig& c, bool translation_first);
+                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0, const AffineFitConfig& c,
+                                   bool translation_first);
 
 AffineFit fitAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
                                 const AffineFitConfig& c) {
@@ -81,14 +81,13 @@ AffineFit fitAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std
 }
 
 AffineFit refineAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
-                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0,
-                                   const AffineFitConfig& c) {
+                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0, const AffineFitConfig& c) {
   return refineAffineGemanMcClure(x, y, A0, b0, c, false);
 }
 
 AffineFit refineAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
-                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0,
-                                   const AffineFitConfig& c, bool translation_first) {
+                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0, const AffineFitConfig& c,
+                                   bool translation_first) {
   if (x.size() != y.size()) throw std::invalid_argument("refineAffineGemanMcClure: x and y differ in size");
   AffineFit fit;
   const size_t n = x.size();

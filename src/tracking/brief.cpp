@@ -19,7 +19,7 @@ struct SplitMix {
     return z ^ (z >> 31);
   }
   double uniform() { return (next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
-  double gauss() {  // Box-Muller
+  double gauss() {                                                          // Box-Muller
     const double u1 = std::max(uniform(), 1e-12), u2 = uniform();
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
   }

@@ -66,8 +66,7 @@ float robustCurvatureScale(const cv::Mat& kappa, int step) {
   return *mid;
 }
 
-void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std::vector<Extremum>* out,
-                   int stripes) {
+void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std::vector<Extremum>* out, int stripes) {
   out->clear();
   const int rows = kappa.rows, cols = kappa.cols;
   border = std::max(border, r + 1);
@@ -111,9 +110,12 @@ void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std
   if (n == 1) {
     work(0);
   } else {
-    cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& rg) {
-      for (int s = rg.start; s < rg.end; ++s) work(s);
-    }, n);
+    cv::parallel_for_(
+        cv::Range(0, n),
+        [&](const cv::Range& rg) {
+          for (int s = rg.start; s < rg.end; ++s) work(s);
+        },
+        n);
   }
   size_t total = 0;
   for (const auto& p : parts) total += p.size();
@@ -121,8 +123,7 @@ void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std
   for (const auto& p : parts) out->insert(out->end(), p.begin(), p.end());
 }
 
-bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const ClimbParams& p,
-               Eigen::Vector2i* out) {
+bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const ClimbParams& p, Eigen::Vector2i* out) {
   const int xmin = p.border, ymin = p.border;
   const int xmax = kappa.cols - 1 - p.border, ymax = kappa.rows - 1 - p.border;
   int x = static_cast<int>(std::lround(prediction.x()));
@@ -146,7 +147,11 @@ bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const Cl
         const int xx = x + dx;
         if ((dx | dy) == 0 || xx < xmin || xx > xmax) continue;
         const float v = F(xx, yy);
-        if (v > bv) { bv = v; bx = xx; by = yy; }
+        if (v > bv) {
+          bv = v;
+          bx = xx;
+          by = yy;
+        }
       }
     }
     if (bx == x && by == y) {

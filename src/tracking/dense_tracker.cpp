@@ -7,12 +7,12 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "tracker_internal.h"
 #include "vitamin_e/common/timing.h"
 #include "vitamin_e/tracking/affine_flow.h"
 #include "vitamin_e/tracking/brief.h"
 #include "vitamin_e/tracking/curvature.h"
 #include "vitamin_e/tracking/patch_align.h"
-#include "tracker_internal.h"
 
 namespace vitamin_e::tracking {
 namespace {
@@ -22,38 +22,46 @@ struct Track {
   Eigen::Vector2f uv = Eigen::Vector2f::Zero();
   int age = 0;
   float sign = 1.f;
-  float strength = 0.f;  // normalized |kappa| at the last position
-  float birth_exposure = 0.f;  // Impl::exposure_log when the track was detected
+  float strength = 0.f;                             // normalized |kappa| at the last position
+  float birth_exposure = 0.f;                       // Impl::exposure_log when the track was detected
   Eigen::Vector2f resid = Eigen::Vector2f::Zero();  // last motion minus the dominant flow (parallax)
 };
 
 // Result of tracking one point into the current frame.
 struct Step {
   Eigen::Vector2f uv;
-  Eigen::Vector2f ext;  // sub-pixel extremum (uv may be filtered)
-  Eigen::Vector2f pred; // flow prediction x_bar
+  Eigen::Vector2f ext;    // sub-pixel extremum (uv may be filtered)
+  Eigen::Vector2f pred;   // flow prediction x_bar
   Eigen::Vector2f patch;  // the previous position carried over by patch alignment (if aligned)
   bool aligned = false;
-  float gain = 1.f;     // contrast gain fitted by that alignment
+  float gain = 1.f;  // contrast gain fitted by that alignment
   Eigen::Vector2i px;
   float kappa = 0.f;
-  float peak = 0.f;     // sign*kappa of the sub-pixel peak
-  bool climbed = false; // the forward climb reached a maximum (peak is valid)
+  float peak = 0.f;      // sign*kappa of the sub-pixel peak
+  bool climbed = false;  // the forward climb reached a maximum (peak is valid)
   bool ok = false;
   int fail = 0;  // LossReason of a failed step (kLossOk when ok)
 };
 
 // Why a track step failed; counted per frame in TrackerFrame::lost_by.
 enum LossReason : int {
-  kLossOk = 0, kLossClimb, kLossWeak, kLossStrengthChange, kLossFlat, kLossBackClimb, kLossForwardBackward,
-  kLossUnconfirmed, kLossDuplicate, kLossReasons
+  kLossOk = 0,
+  kLossClimb,
+  kLossWeak,
+  kLossStrengthChange,
+  kLossFlat,
+  kLossBackClimb,
+  kLossForwardBackward,
+  kLossUnconfirmed,
+  kLossDuplicate,
+  kLossReasons
 };
 // An absolute floor that follows the exposure (floor_follows_exposure) drops by
 // at most this factor: a darker change than that (a covered lens) ends tracks.
 constexpr float kMaxFloorDrop = 16.f;
 
-const char* const kLossNames[kLossReasons] = {"ok", "climb", "weak", "strength_change", "flat", "back_climb",
-                                              "forward_backward", "unconfirmed", "duplicate"};
+const char* const kLossNames[kLossReasons] = {
+    "ok", "climb", "weak", "strength_change", "flat", "back_climb", "forward_backward", "unconfirmed", "duplicate"};
 
 
 }  // namespace
@@ -75,7 +83,7 @@ struct DenseTracker::Impl {
   std::vector<Extremum> cands;
   std::vector<int> cell_count, cell_slots;
   std::vector<float> scratch;
-  double sigma_state = 0.0;  // smoothed adaptive sigma (0 = not yet set)
+  double sigma_state = 0.0;    // smoothed adaptive sigma (0 = not yet set)
   float strength_ratio = 1.f;  // this frame's median new/old strength of the climbed tracks
   float exposure_log = 0.f;    // sum over frames of log(median raw peak ratio): log of the contrast change cubed
   float exposure_step = 0.f;   // this frame's part of it (set by trackAll)
@@ -152,8 +160,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
   // exposure_log; the absolute floor of a track follows it since the track's
   // birth (see floor_follows_exposure).
   const float raw_ratio = strength_ratio * scale / prev_scale;
-  const float exposure_now =
-      exposure_log + (std::isfinite(raw_ratio) && raw_ratio > 0.f ? std::log(raw_ratio) : 0.f);
+  const float exposure_now = exposure_log + (std::isfinite(raw_ratio) && raw_ratio > 0.f ? std::log(raw_ratio) : 0.f);
   const float min_rel = static_cast<float>(cfg.min_track_curvature) * scale;
   const float floor_abs = static_cast<float>(cfg.min_abs_curvature);
   const float floor_min_log = -std::log(kMaxFloorDrop);
@@ -250,8 +257,8 @@ void DenseTracker::Impl::alignSteps() {
   // patch's answer. Suspended on frames where the patch itself fails too often
   // (fast motion and blur change the appearance): there it would only thin out
   // the tracks the pose needs.
-  const bool confirm = cfg.max_align_disagreement_px > 0.0 &&
-                       unaligned <= cfg.confirm_max_unaligned_fraction * candidates;
+  const bool confirm =
+      cfg.max_align_disagreement_px > 0.0 && unaligned <= cfg.confirm_max_unaligned_fraction * candidates;
   const float max_d2 = static_cast<float>(cfg.max_align_disagreement_px * cfg.max_align_disagreement_px);
   for (Step& s : steps) {
     if (!s.ok) continue;
@@ -288,18 +295,21 @@ int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Tra
     // Keep the `free_slots` strongest candidates of the cell.
     int weakest = -1;
     for (int j = 0; j < free_slots; ++j) {
-      if (slots[j] < 0) { weakest = j; break; }
+      if (slots[j] < 0) {
+        weakest = j;
+        break;
+      }
       if (weakest < 0 || std::fabs(cands[slots[j]].kappa) < std::fabs(cands[slots[weakest]].kappa)) weakest = j;
     }
     if (slots[weakest] < 0 || std::fabs(cands[slots[weakest]].kappa) < std::fabs(e.kappa)) slots[weakest] = i;
   }
   std::vector<int> chosen;
   chosen.reserve(cell_slots.size());
-  for (int s : cell_slots) if (s >= 0) chosen.push_back(s);
+  for (int s : cell_slots)
+    if (s >= 0) chosen.push_back(s);
   if (static_cast<int>(chosen.size()) > room) {
-    std::nth_element(chosen.begin(), chosen.begin() + room, chosen.end(), [&](int a, int b) {
-      return std::fabs(cands[a].kappa) > std::fabs(cands[b].kappa);
-    });
+    std::nth_element(chosen.begin(), chosen.begin() + room, chosen.end(),
+                     [&](int a, int b) { return std::fabs(cands[a].kappa) > std::fabs(cands[b].kappa); });
     chosen.resize(room);
   }
   std::sort(chosen.begin(), chosen.end());
@@ -371,8 +381,9 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   double sigma = cfg.smoothing_sigma;
   if (cfg.adaptive_smoothing) {
     out.noise_ratio = noiseToGradientRatio(gray, &m.scratch);
-    const double target = std::clamp(cfg.smoothing_sigma * std::sqrt(std::max(1.0, out.noise_ratio / cfg.noise_reference)),
-                                      cfg.smoothing_sigma, cfg.max_smoothing_sigma);
+    const double target =
+        std::clamp(cfg.smoothing_sigma * std::sqrt(std::max(1.0, out.noise_ratio / cfg.noise_reference)),
+                   cfg.smoothing_sigma, cfg.max_smoothing_sigma);
     // Slow and quantized: consecutive curvature images stay comparable.
     m.sigma_state = m.sigma_state > 0.0 ? 0.8 * m.sigma_state + 0.2 * target : target;
     sigma = std::round(m.sigma_state * 4.0) / 4.0;

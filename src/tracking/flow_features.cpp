@@ -52,8 +52,8 @@ double noiseToGradientRatio(const cv::Mat& g, std::vector<float>* grad) {
     const std::uint8_t* b = g.ptr<std::uint8_t>(y);
     const std::uint8_t* c = g.ptr<std::uint8_t>(y + 1);
     for (int x = 1; x + 1 < g.cols; x += 2) {
-      const int lap = (a[x - 1] - 2 * a[x] + a[x + 1]) - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) +
-                      (c[x - 1] - 2 * c[x] + c[x + 1]);
+      const int lap =
+          (a[x - 1] - 2 * a[x] + a[x + 1]) - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) + (c[x - 1] - 2 * c[x] + c[x + 1]);
       sum += std::abs(lap);
       ++n;
       const float gx = 0.5f * (b[x + 1] - b[x - 1]), gy = 0.5f * (c[x] - a[x]);

@@ -27,15 +27,12 @@ void TrackerConfig::validate() const {
   require(std::isfinite(kappa_smoothing_sigma) && kappa_smoothing_sigma >= 0.0 && kappa_smoothing_sigma <= 10.0,
           "kappa_smoothing_sigma", "must be in [0, 10]");
   require(std::isfinite(min_curvature) && min_curvature >= 0.0, "min_curvature", "must be finite and >= 0");
-  require(std::isfinite(min_abs_curvature) && min_abs_curvature >= 0.0, "min_abs_curvature",
-          "must be finite and >= 0");
-  require(std::isfinite(brief_scale) && brief_scale > 0.0 && brief_scale <= 1.0, "brief_scale",
-          "must be in (0, 1]");
+  require(std::isfinite(min_abs_curvature) && min_abs_curvature >= 0.0, "min_abs_curvature", "must be finite and >= 0");
+  require(std::isfinite(brief_scale) && brief_scale > 0.0 && brief_scale <= 1.0, "brief_scale", "must be in (0, 1]");
   require(brief_max_keypoints >= 3, "brief_max_keypoints", "must be >= 3");
   require(brief_patch_size >= 7 && brief_patch_size % 2 == 1, "brief_patch_size", "must be odd and >= 7");
   require(brief_max_distance >= 0 && brief_max_distance <= 256, "brief_max_distance", "must be in [0, 256]");
-  require(std::isfinite(brief_ratio) && brief_ratio > 0.0 && brief_ratio <= 1.0, "brief_ratio",
-          "must be in (0, 1]");
+  require(std::isfinite(brief_ratio) && brief_ratio > 0.0 && brief_ratio <= 1.0, "brief_ratio", "must be in (0, 1]");
   require(std::isfinite(flow_sigma_px) && flow_sigma_px > 0.0, "flow_sigma_px", "must be > 0");
   require(std::isfinite(flow_sigma_start_px) && flow_sigma_start_px >= flow_sigma_px, "flow_sigma_start_px",
           "must be >= flow_sigma_px");

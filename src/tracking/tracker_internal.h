@@ -21,12 +21,15 @@ void forStripes(int n, int stripes, int min_parallel, const F& body) {
     body(0, n);
     return;
   }
-  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
-    for (int s = r.start; s < r.end; ++s) {
-      body(static_cast<int>(static_cast<long>(n) * s / stripes),
-           static_cast<int>(static_cast<long>(n) * (s + 1) / stripes));
-    }
-  }, stripes);
+  cv::parallel_for_(
+      cv::Range(0, stripes),
+      [&](const cv::Range& r) {
+        for (int s = r.start; s < r.end; ++s) {
+          body(static_cast<int>(static_cast<long>(n) * s / stripes),
+               static_cast<int>(static_cast<long>(n) * (s + 1) / stripes));
+        }
+      },
+      stripes);
 }
 
 // Keypoints and descriptors of the shrunk image, positions in full-res pixels.

@@ -3,14 +3,14 @@
 // is its camera pose, and never a second parent for the camera frame; runtime
 // parameters change through dynamic_reconfigure.
 #include <dynamic_reconfigure/Reconfigure.h>
-#include <Eigen/Eigenvalues>
 #include <geometry_msgs/PoseStamped.h>
-#include <nav_msgs/Odometry.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/static_transform_broadcaster.h>
+#include <Eigen/Eigenvalues>
 
 #include "ros_test_helpers.h"
 #include "vitamin_e/TrackingStatus.h"
@@ -74,14 +74,14 @@ TEST(Rep105, MapToOdomCompletesTheCameraPose) {
       << "no map -> odom at the last pose's stamp " << last->header.stamp;
   EXPECT_FALSE(camera_with_two_parents) << "map -> cam0 published although cam0 is under base_link";
   const Eigen::Isometry3d T_w_c = vitamin_e_ros::fromPoseMsg(last->pose);
-  const Eigen::Isometry3d composed =
-      vitamin_e_ros::fromTransformMsg(map_odom.transform) * T_odom_base * T_base_cam;
-  EXPECT_LT((composed.matrix() - T_w_c.matrix()).cwiseAbs().maxCoeff(), 1e-5)
-      << "map->odom->base->cam:\n" << composed.matrix() << "\npose:\n" << T_w_c.matrix();
+  const Eigen::Isometry3d composed = vitamin_e_ros::fromTransformMsg(map_odom.transform) * T_odom_base * T_base_cam;
+  EXPECT_LT((composed.matrix() - T_w_c.matrix()).cwiseAbs().maxCoeff(), 1e-5) << "map->odom->base->cam:\n"
+                                                                              << composed.matrix() << "\npose:\n"
+                                                                              << T_w_c.matrix();
 
   // Issue 15, item 5: ~odometry is the base's pose (child ~base_frame) with a covariance.
-  ASSERT_TRUE(odom.waitFor([&](const auto& m) { return !m.empty() && m.back()->header.stamp == last->header.stamp; },
-                           10.0));
+  ASSERT_TRUE(
+      odom.waitFor([&](const auto& m) { return !m.empty() && m.back()->header.stamp == last->header.stamp; }, 10.0));
   const auto o = odom.messages().back();
   EXPECT_EQ(o->child_frame_id, "base_link");
   EXPECT_EQ(o->header.frame_id, "map");
@@ -108,7 +108,8 @@ TEST(Rep105, DynamicReconfigure) {
   reconfigure.request.config.bools.push_back(points);
   ASSERT_TRUE(ros::service::call("/tracking/set_parameters", reconfigure));
   bool period_set = false, points_set = false;
-  for (const auto& d : reconfigure.response.config.doubles) period_set |= d.name == "map_points_period" && d.value == 2.5;
+  for (const auto& d : reconfigure.response.config.doubles)
+    period_set |= d.name == "map_points_period" && d.value == 2.5;
   for (const auto& b : reconfigure.response.config.bools) points_set |= b.name == "publish_points" && !b.value;
   EXPECT_TRUE(period_set);
   EXPECT_TRUE(points_set);

@@ -8,13 +8,13 @@
 #include <cmath>
 #include <memory>
 
-#include <Eigen/Eigenvalues>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <std_srvs/SetBool.h>
+#include <Eigen/Eigenvalues>
 
 #include "ros_test_helpers.h"
 #include "vitamin_e/SaveFile.h"
@@ -154,7 +154,8 @@ TEST(Interfaces, DiagnosticsAndCovariance) {
             std::map<std::string, std::string> kv;
             for (const auto& v : s.values) kv[v.key] = v.value;
             seen = kv.count("input rate [Hz]") && kv.count("processed rate [Hz]") && kv.count("state") &&
-                   kv.count("tracked points") && kv.count("re-initializations") && kv.count("latency image -> pose mean [s]");
+                   kv.count("tracked points") && kv.count("re-initializations") &&
+                   kv.count("latency image -> pose mean [s]");
             // Not necessarily OK: on a loaded machine four trackers may process fewer frames
             // than arrive (a WARN); the levels are unit-tested (RosTrackingHealth.Levels).
             if (seen && kv["state"] == "tracking" && std::stod(kv["input rate [Hz]"]) > 0.0 &&
@@ -223,8 +224,7 @@ TEST(Loop, SecondPassTracked) {
   setPaused(false);
   // Most of the second pass processed (frames queue in the tracker: every frame is processed).
   EXPECT_TRUE(status.waitFor(
-      [&](const Statuses& s) { return !s.empty() && s.back()->segment >= 2 && processed(s) >= 2 * frames - 5; },
-      150.0))
+      [&](const Statuses& s) { return !s.empty() && s.back()->segment >= 2 && processed(s) >= 2 * frames - 5; }, 150.0))
       << "frames processed " << processed(status.messages());
   setPaused(true);
   const auto segments = saveTrajectory("tracking");

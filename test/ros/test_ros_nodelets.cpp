@@ -103,8 +103,8 @@ void playBagOnce(BagRun** out) {
   ASSERT_TRUE(run->mesh.waitForPublisher(30.0));
   resumePlayer();
   // Every frame of the bag is processed (~process_all_frames), however slow the SLAM.
-  ASSERT_TRUE(run->status.waitFor(
-      [&](const Statuses& s) { return static_cast<int>(framesProcessed(s)) >= frames; }, 150.0))
+  ASSERT_TRUE(
+      run->status.waitFor([&](const Statuses& s) { return static_cast<int>(framesProcessed(s)) >= frames; }, 150.0))
       << "frames processed: " << framesProcessed(run->status.messages()) << " of " << frames;
   failed = false;
   *out = run;

@@ -197,8 +197,7 @@ TEST(Threads, ServicesAndReconfigureDoNotWaitForTheFrameInProgress) {
   EXPECT_GT(snapshots.back().size(), 0u) << "no pose in the snapshots: the prefix check checked nothing";
   // Bag mode drops nothing.
   EXPECT_TRUE(waitForDiagnostic(
-      diagnostics, "slow_bag",
-      [&](auto& kv) { return kv["frames processed"] == std::to_string(kFrames); }, 10.0, &kv));
+      diagnostics, "slow_bag", [&](auto& kv) { return kv["frames processed"] == std::to_string(kFrames); }, 10.0, &kv));
   EXPECT_EQ(kv["frames dropped by the queue"], "0");
 }
 

@@ -36,10 +36,10 @@ struct ClipSpec {
   std::string path = "turn";  // a drive path name (synth::drivePathNames)
   int width = 613;            // KITTI's camera scaled to width x height
   int height = 185;
-  int first = 0;              // first frame of the path (10 Hz)
-  int frames = 0;             // 0: to the end of the path
-  std::uint64_t seed = 0;     // town and noise
-  double t0 = 100.0;          // timestamp of the clip's first image [s]
+  int first = 0;           // first frame of the path (10 Hz)
+  int frames = 0;          // 0: to the end of the path
+  std::uint64_t seed = 0;  // town and noise
+  double t0 = 100.0;       // timestamp of the clip's first image [s]
 };
 
 // The frames of a clip, with sensor noise sigma 1 grey level (seeded per frame

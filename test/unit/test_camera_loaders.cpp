@@ -1,9 +1,9 @@
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <functional>
-#include <fstream>
 #include <unistd.h>
+#include <filesystem>
+#include <fstream>
+#include <functional>
 
 #include "vitamin_e/camera/camera.h"
 
@@ -15,9 +15,8 @@ namespace {
 class LoaderTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("ve_calib_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("ve_calib_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -91,10 +90,9 @@ projection_matrix:
   data: [500, 0, 320, 0, 0, 500, 240, 0, 0, 0, 1, 0]
 )";
 
-const char* kKittiLabelled =
-    "P0: 7.070912e+02 0 6.018873e+02 0 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
-    "P1: 7.070912e+02 0 6.018873e+02 -3.798145e+02 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
-    "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
+const char* kKittiLabelled = "P0: 7.070912e+02 0 6.018873e+02 0 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
+                             "P1: 7.070912e+02 0 6.018873e+02 -3.798145e+02 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
+                             "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
 
 }  // namespace
 
@@ -120,12 +118,11 @@ TEST_F(LoaderTest, EurocSensorYaml) {
 }
 
 TEST_F(LoaderTest, EurocOpenCvMatrixTag) {
-  const std::string path = write("cv.yaml",
-                                 "%YAML:1.0\n---\nT_BS: !!opencv-matrix\n  rows: 4\n  cols: 4\n  dt: d\n"
-                                 "  data: [1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n"
-                                 "resolution: [640, 480]\nintrinsics: [500, 500, 320, 240]\n"
-                                 "distortion_model: radial-tangential\n"
-                                 "distortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n");
+  const std::string path = write("cv.yaml", "%YAML:1.0\n---\nT_BS: !!opencv-matrix\n  rows: 4\n  cols: 4\n  dt: d\n"
+                                            "  data: [1, 0, 0, 0.5, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\n"
+                                            "resolution: [640, 480]\nintrinsics: [500, 500, 320, 240]\n"
+                                            "distortion_model: radial-tangential\n"
+                                            "distortion_coefficients: [0.0, 0.0, 0.0, 0.0]\n");
   const CameraCalibration c = loadCalibration(path);
   EXPECT_EQ(c.format, "euroc");
   EXPECT_NEAR(c.T_b_c.translation().x(), 0.5, 1e-12);
@@ -187,9 +184,9 @@ TEST_F(LoaderTest, KittiCalib) {
   EXPECT_NEAR(c1.T_b_c.translation().x(), 0.5371, 1e-3);
   EXPECT_EQ(loadCalibration(path, 1226, 370).format, "kitti");
   // Bare lines (no labels), as in some excerpts.
-  const std::string bare = write("bare.txt",
-                                 "7.070912e+02 0 6.018873e+02 0 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
-                                 "7.070912e+02 0 6.018873e+02 -3.798145e+02 0 7.070912e+02 1.831104e+02 0 0 0 1 0");
+  const std::string bare =
+      write("bare.txt", "7.070912e+02 0 6.018873e+02 0 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
+                        "7.070912e+02 0 6.018873e+02 -3.798145e+02 0 7.070912e+02 1.831104e+02 0 0 0 1 0");
   EXPECT_DOUBLE_EQ(loadCalibration(bare, 1226, 370).camera.fy(), 707.0912);
   EXPECT_NEAR(loadKittiCalib(bare, 1226, 370, 1).T_b_c.translation().x(), 0.5371, 1e-3);
 }

@@ -41,8 +41,8 @@ class BenchOptions : public ::testing::Test {
   void TearDown() override { fs::remove_all(tmp_); }
   Result run(const std::string& bench, const std::string& args) {
     const fs::path out = tmp_ / "out.txt", err = tmp_ / "err.txt";
-    const std::string cmd = "timeout 20 " + (bin_dir_ / bench).string() + " " + args + " </dev/null >" +
-                            out.string() + " 2>" + err.string();
+    const std::string cmd = "timeout 20 " + (bin_dir_ / bench).string() + " " + args + " </dev/null >" + out.string() +
+                            " 2>" + err.string();
     const int status = std::system(cmd.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

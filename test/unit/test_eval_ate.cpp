@@ -76,8 +76,8 @@ double hornRmse(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& dst, ve::Si
   const Eigen::Vector3d ms = src.rowwise().mean(), md = dst.rowwise().mean();
   const Eigen::Matrix3Xd a = src.colwise() - ms, b = dst.colwise() - md;
   const Eigen::Matrix3d M = a * b.transpose();  // M(i,j) = sum a_i b_j
-  const double Sxx = M(0, 0), Sxy = M(0, 1), Sxz = M(0, 2), Syx = M(1, 0), Syy = M(1, 1), Syz = M(1, 2),
-               Szx = M(2, 0), Szy = M(2, 1), Szz = M(2, 2);
+  const double Sxx = M(0, 0), Sxy = M(0, 1), Sxz = M(0, 2), Syx = M(1, 0), Syy = M(1, 1), Syz = M(1, 2), Szx = M(2, 0),
+               Szy = M(2, 1), Szz = M(2, 2);
   Eigen::Matrix4d N;
   N << Sxx + Syy + Szz, Syz - Szy, Szx - Sxz, Sxy - Syx,  //
       Syz - Szy, Sxx - Syy - Szz, Sxy + Syx, Szx + Sxz,   //
@@ -89,7 +89,8 @@ double hornRmse(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& dst, ve::Si
   out->scale = (b.cwiseProduct(out->R * a)).sum() / a.squaredNorm();
   out->t = md - out->scale * out->R * ms;
   double sum_sq = 0.0;
-  for (Eigen::Index i = 0; i < src.cols(); ++i) sum_sq += (out->apply(Eigen::Vector3d(src.col(i))) - dst.col(i)).squaredNorm();
+  for (Eigen::Index i = 0; i < src.cols(); ++i)
+    sum_sq += (out->apply(Eigen::Vector3d(src.col(i))) - dst.col(i)).squaredNorm();
   return std::sqrt(sum_sq / static_cast<double>(src.cols()));
 }
 
@@ -113,12 +114,13 @@ class TempDir {
 
 void writeEurocCsv(const std::string& path, const ve::Trajectory& traj, long long t0_ns, long long dt_ns) {
   FILE* f = std::fopen(path.c_str(), "w");
-  std::fprintf(f, "#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []\n");
+  std::fprintf(
+      f, "#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []\n");
   for (std::size_t i = 0; i < traj.size(); ++i) {
     const Eigen::Quaterniond q(traj[i].T_w_c.rotation());
     const Eigen::Vector3d& p = traj[i].T_w_c.translation();
-    std::fprintf(f, "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,0,0,0\n", t0_ns + dt_ns * static_cast<long long>(i),
-                 p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
+    std::fprintf(f, "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,0,0,0\n", t0_ns + dt_ns * static_cast<long long>(i), p.x(),
+                 p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
   }
   std::fclose(f);
 }

@@ -43,10 +43,12 @@ TEST(Lie, So3JacobiansMatchNumeric) {
     Eigen::Matrix3d Jr_num, Jl_num;
     for (int a = 0; a < 3; ++a) {
       const Eigen::Vector3d d = Eigen::Vector3d::Unit(a) * h;
-      Jr_num.col(a) = (logSO3(expSO3(phi).transpose() * expSO3(phi + d)) -
-                       logSO3(expSO3(phi).transpose() * expSO3(phi - d))) / (2 * h);
-      Jl_num.col(a) = (logSO3(expSO3(phi + d) * expSO3(phi).transpose()) -
-                       logSO3(expSO3(phi - d) * expSO3(phi).transpose())) / (2 * h);
+      Jr_num.col(a) =
+          (logSO3(expSO3(phi).transpose() * expSO3(phi + d)) - logSO3(expSO3(phi).transpose() * expSO3(phi - d))) /
+          (2 * h);
+      Jl_num.col(a) =
+          (logSO3(expSO3(phi + d) * expSO3(phi).transpose()) - logSO3(expSO3(phi - d) * expSO3(phi).transpose())) /
+          (2 * h);
     }
     EXPECT_LT((rightJacobianSO3(phi) - Jr_num).norm(), 1e-7);
     EXPECT_LT((leftJacobianSO3(phi) - Jl_num).norm(), 1e-7);

@@ -73,8 +73,8 @@ TEST(TwoView, RecoversRelativePoseUpToScale) {
   const TwoViewResult r = initializeTwoView(xy0, xy1, cfg);
   ASSERT_TRUE(r.ok) << r.reason;
   EXPECT_LT(rotationAngle(r.T_c1_c0.linear(), T_c1_c0.linear()) * 180 / M_PI, 0.1);
-  const double dir_err = std::acos(std::min(
-      1.0, r.T_c1_c0.translation().normalized().dot(T_c1_c0.translation().normalized())));
+  const double dir_err =
+      std::acos(std::min(1.0, r.T_c1_c0.translation().normalized().dot(T_c1_c0.translation().normalized())));
   EXPECT_LT(dir_err * 180 / M_PI, 1.0);
   EXPECT_GT(r.median_parallax_deg, cfg.min_parallax_deg);
   EXPECT_GE(r.num_inliers, 250);
@@ -136,8 +136,9 @@ TEST(TwoView, PlanarSceneGivesTheTrueMotionNotTheTwistedOne) {
       ++cases;
       if (!r.ok) continue;
       ++ok;
-      const double dir_deg = std::acos(std::min(1.0, r.T_c1_c0.translation().normalized().dot(
-                                                         T_c1_c0.translation().normalized()))) * 180 / M_PI;
+      const double dir_deg =
+          std::acos(std::min(1.0, r.T_c1_c0.translation().normalized().dot(T_c1_c0.translation().normalized()))) * 180 /
+          M_PI;
       EXPECT_LT(rotationAngle(r.T_c1_c0.linear(), T_c1_c0.linear()) * 180 / M_PI, 0.3)
           << "baseline " << baseline << " seed " << seed;
       EXPECT_LT(dir_deg, 5.0) << "baseline " << baseline << " seed " << seed;

@@ -12,9 +12,9 @@
 #include <random>
 #include <sstream>
 
+#include <yaml-cpp/yaml.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 namespace fs = std::filesystem;
 
@@ -81,8 +81,9 @@ class RunnerTest : public ::testing::Test {
     }
     write(cam / "data.csv", csv);
     write(cam / "sensor.yaml", "%YAML:1.0\nresolution: [" + std::to_string(w) + ", " + std::to_string(h) +
-                                   "]\ncamera_model: pinhole\nintrinsics: [150, 150, " + std::to_string(w / 2) +
-                                   ", " + std::to_string(h / 2) + "]\ndistortion_model: radial-tangential\n"
+                                   "]\ncamera_model: pinhole\nintrinsics: [150, 150, " + std::to_string(w / 2) + ", " +
+                                   std::to_string(h / 2) +
+                                   "]\ndistortion_model: radial-tangential\n"
                                    "distortion_coefficients: [-0.1, 0.01, 0, 0]\nrate_hz: 20\n");
     return dir_ / "seq";
   }
@@ -231,8 +232,7 @@ TEST_F(RunnerTest, ReadsRosbagsWithEveryEncoding) {
                           " 2>" + (dir_ / "err.txt").string();
   const int status = std::system(cmd.c_str());
   // The package always builds the ROS layer (catkin), so the runner reads bags.
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0)
-      << std::ifstream(dir_ / "err.txt").rdbuf();
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << std::ifstream(dir_ / "err.txt").rdbuf();
   std::ifstream in(listing);
   std::vector<std::string> lines;
   for (std::string l; std::getline(in, l);) lines.push_back(l);

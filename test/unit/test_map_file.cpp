@@ -27,8 +27,8 @@ namespace {
 class TempDir {
  public:
   TempDir() {
-    path_ = fs::temp_directory_path() / ("ve_map_file_" + std::to_string(::getpid()) + "_" +
-                                         std::to_string(counter_++));
+    path_ =
+        fs::temp_directory_path() / ("ve_map_file_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
@@ -96,9 +96,9 @@ ve::map::Map grownMap() {
 
 MapFileContents contentsOf(const ve::map::Map& map) {
   MapFileContents c;
-  c.camera = ve::camera::Camera(752, 480, 458.654, 457.296, 367.215, 248.375,
-                                ve::camera::DistortionModel::kRadialTangential,
-                                {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
+  c.camera =
+      ve::camera::Camera(752, 480, 458.654, 457.296, 367.215, 248.375, ve::camera::DistortionModel::kRadialTangential,
+                         {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
   c.scale_convention = "test";
   c.scene_depth = 1.7;
   c.descriptors = {31, 2.0};
@@ -329,8 +329,8 @@ TEST(MapFile, TruncatedFilesAreRefused) {
   SavedMap saved;
   const std::string path = saved.dir.file("cut.vemap");
   const std::size_t eol = saved.bytes.find('\n');
-  for (std::size_t cut : {std::size_t{5}, eol, eol + 1, eol + 9, eol + 17, eol + 100, saved.bytes.size() / 2,
-                          saved.bytes.size() - 1}) {
+  for (std::size_t cut :
+       {std::size_t{5}, eol, eol + 1, eol + 9, eol + 17, eol + 100, saved.bytes.size() / 2, saved.bytes.size() - 1}) {
     writeAll(path, saved.bytes.substr(0, cut));
     expectRefused(path, "");
   }

@@ -75,7 +75,7 @@ TEST(Map, LandmarkStillTrackedIsRetiredOnceNoLongerSeen) {
   ASSERT_EQ(l.observations.size(), 1u);
   map.markSeen(7, 10);  // the track lives on without new keyframes seeing it
   map.addKeyframe(keyframeSeeing(5, 100, 1));
-  map.addKeyframe(keyframeSeeing(8, 100, 1));  // retires keyframe 0: landmark 7 has no observation left
+  map.addKeyframe(keyframeSeeing(8, 100, 1));   // retires keyframe 0: landmark 7 has no observation left
   ASSERT_NE(map.landmark(7), nullptr);          // still seen at frame 10 > oldest keyframe 5
   map.addKeyframe(keyframeSeeing(12, 100, 1));  // oldest is now 8 < 10: still seen
   ASSERT_NE(map.landmark(7), nullptr);
@@ -170,7 +170,7 @@ TEST(Map, RelabelMovesKeyframeObservationsAndRefusesClashes) {
   Keyframe a = keyframeSeeing(1, 10, 1);
   Keyframe b = keyframeSeeing(2, 10, 1);
   b.observations.emplace(20, Eigen::Vector2d(0.5, 0.5));  // track 20 and 10 in one keyframe
-  Keyframe c = keyframeSeeing(3, 30, 1);                   // a new track, 30, not yet mapped
+  Keyframe c = keyframeSeeing(3, 30, 1);                  // a new track, 30, not yet mapped
   map.addKeyframe(a);
   map.addKeyframe(b);
   map.addKeyframe(c);

@@ -16,9 +16,8 @@ namespace {
 
 // Number of points on the convex hull boundary (collinear boundary points included).
 int hullBoundaryCount(std::vector<Vector2d> p) {
-  std::sort(p.begin(), p.end(), [](const Vector2d& a, const Vector2d& b) {
-    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-  });
+  std::sort(p.begin(), p.end(),
+            [](const Vector2d& a, const Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   std::vector<Vector2d> h;
   auto build = [&](auto begin, auto end) {
     const std::size_t base = h.size();
@@ -123,10 +122,10 @@ TEST(FrameMesher, DropsStepLongAndObliqueTriangles) {
   const FrameMesh mesh = mesher.build(ids, uv, depth, image);
   ASSERT_GT(mesh.triangles.size(), 500u);
   for (const auto& t : mesh.triangles) {
-    const double lo = std::min({mesh.vertices[t[0]].inv_depth, mesh.vertices[t[1]].inv_depth,
-                                mesh.vertices[t[2]].inv_depth});
-    const double hi = std::max({mesh.vertices[t[0]].inv_depth, mesh.vertices[t[1]].inv_depth,
-                                mesh.vertices[t[2]].inv_depth});
+    const double lo =
+        std::min({mesh.vertices[t[0]].inv_depth, mesh.vertices[t[1]].inv_depth, mesh.vertices[t[2]].inv_depth});
+    const double hi =
+        std::max({mesh.vertices[t[0]].inv_depth, mesh.vertices[t[1]].inv_depth, mesh.vertices[t[2]].inv_depth});
     EXPECT_DOUBLE_EQ(lo, hi) << "triangle spans the step";
   }
   // Without the jump filter the step is bridged by triangles that are oblique to the rays.

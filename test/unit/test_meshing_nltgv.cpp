@@ -16,8 +16,8 @@ PinholeImage testImage() { return {{450.0, 450.0, 376.0, 240.0}, 752, 480}; }
 
 // Jittered-grid pixels; true inverse depth from `truth`; multiplicative noise.
 template <typename Truth>
-FrameMesh noisyMesh(const Truth& truth, double noise, double outlier_rate, unsigned seed,
-                    std::vector<double>* true_inv, bool cut_jumps = false) {
+FrameMesh noisyMesh(const Truth& truth, double noise, double outlier_rate, unsigned seed, std::vector<double>* true_inv,
+                    bool cut_jumps = false) {
   const PinholeImage image = testImage();
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> J(-4.0, 4.0), U(0.0, 1.0);

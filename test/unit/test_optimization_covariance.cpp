@@ -145,7 +145,9 @@ TEST(BaCovariance, MatchesADenseNumericalReference) {
       ASSERT_TRUE(sum.camera_covariance_valid[c]) << "camera " << c << (schur ? " (Schur)" : " (plain)");
       const Matrix6d& C = sum.camera_covariance[c];
       EXPECT_LT((C - ref[c]).norm(), 1e-4 * ref[c].norm())
-          << "camera " << c << (schur ? " (Schur)" : " (plain)") << "\nsolver:\n" << C << "\nreference:\n" << ref[c];
+          << "camera " << c << (schur ? " (Schur)" : " (plain)") << "\nsolver:\n"
+          << C << "\nreference:\n"
+          << ref[c];
       EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix6d>(C).eigenvalues().minCoeff(), 0.0);
     }
   }
@@ -183,8 +185,7 @@ TEST(BaCovariance, PredictsTheSpreadOfTheSolutionOverNoise) {
       const BaSummary sum = solveSubspaceGaussNewton(p, opt);
       ASSERT_TRUE(sum.camera_covariance_valid[free_cam]);
       const Matrix6d& C = sum.camera_covariance[free_cam];
-      const geo::Vector6d delta =
-          geo::logSE3(s.truth.cameras[free_cam].T_w_c.inverse() * p.cameras[free_cam].T_w_c);
+      const geo::Vector6d delta = geo::logSE3(s.truth.cameras[free_cam].T_w_c.inverse() * p.cameras[free_cam].T_w_c);
       mahalanobis += delta.dot(C.ldlt().solve(delta));
       empirical += delta * delta.transpose();
       predicted += C;
@@ -195,8 +196,9 @@ TEST(BaCovariance, PredictsTheSpreadOfTheSolutionOverNoise) {
     std::printf("outliers %.2f: mean Mahalanobis %.2f (6 expected), empirical/predicted trace %.2f\n", outliers,
                 mahalanobis, empirical.trace() / predicted.trace());
     EXPECT_NEAR(mahalanobis, 6.0, 0.3 * 6.0) << "outliers " << outliers;
-    EXPECT_NEAR(empirical.trace() / predicted.trace(), 1.0, 0.3)
-        << "outliers " << outliers << "\nempirical:\n" << empirical << "\npredicted:\n" << predicted;
+    EXPECT_NEAR(empirical.trace() / predicted.trace(), 1.0, 0.3) << "outliers " << outliers << "\nempirical:\n"
+                                                                 << empirical << "\npredicted:\n"
+                                                                 << predicted;
   }
 }
 

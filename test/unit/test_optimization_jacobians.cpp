@@ -46,8 +46,8 @@ Case randomCase(std::mt19937& rng) {
   c.K.fy = c.K.fx * (1.0 + 0.02 * u(rng));
   c.K.cx = 370.0 + 5.0 * u(rng);
   c.K.cy = 240.0 + 5.0 * u(rng);
-  c.T_w_c = geo::expSE3((Vector6d() << 2 * u(rng), 2 * u(rng), 2 * u(rng), 2 * u(rng), 2 * u(rng), 2 * u(rng))
-                            .finished());
+  c.T_w_c =
+      geo::expSE3((Vector6d() << 2 * u(rng), 2 * u(rng), 2 * u(rng), 2 * u(rng), 2 * u(rng), 2 * u(rng)).finished());
   const Vector3d p_c(1.5 * u(rng), 1.0 * u(rng), 5.5 + 4.5 * u(rng));
   c.p_w = c.T_w_c * p_c;
   c.uv = c.K.projectPoint(p_c) + Vector2d(4.0 * u(rng), 4.0 * u(rng));
@@ -79,8 +79,8 @@ Matrix26 numericCameraJacobian(const Case& c) {
   for (int k = 0; k < 6; ++k) {
     const double h = 1e-6;
     const Vector6d e = Vector6d::Unit(k) * h;
-    J.col(k) = (residual(c, c.T_w_c * geo::expSE3(e), c.p_w) - residual(c, c.T_w_c * geo::expSE3(-e), c.p_w)) /
-               (2.0 * h);
+    J.col(k) =
+        (residual(c, c.T_w_c * geo::expSE3(e), c.p_w) - residual(c, c.T_w_c * geo::expSE3(-e), c.p_w)) / (2.0 * h);
   }
   return J;
 }
@@ -90,8 +90,8 @@ template <typename A, typename B>
 void expectClose(const A& analytic, const B& numeric, double rel, const std::string& what) {
   const double scale = 1.0 + numeric.cwiseAbs().maxCoeff();
   EXPECT_LT((analytic - numeric).cwiseAbs().maxCoeff(), rel * scale) << what << "\nanalytic\n"
-                                                                    << analytic << "\nnumeric\n"
-                                                                    << numeric;
+                                                                     << analytic << "\nnumeric\n"
+                                                                     << numeric;
 }
 
 struct Evaluated {

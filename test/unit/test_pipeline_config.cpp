@@ -134,8 +134,8 @@ TEST(ConfigTable, CoversEveryMemberOfEveryStruct) {
   }
   const auto& d = c.dense;
   const Region system = regionOf(c, c);
-  const std::vector<Region> system_parts = {regionOf(c, c.tracker), regionOf(c, c.init), regionOf(c, c.pnp),
-                                            regionOf(c, c.triangulation), regionOf(c, c.ba), regionOf(c, c.map),
+  const std::vector<Region> system_parts = {regionOf(c, c.tracker),        regionOf(c, c.init), regionOf(c, c.pnp),
+                                            regionOf(c, c.triangulation),  regionOf(c, c.ba),   regionOf(c, c.map),
                                             regionOf(c, c.relocalization), regionOf(c, c.dense)};
   const std::vector<Region> dense_parts = {regionOf(c, d.mesher), regionOf(c, d.prune), regionOf(c, d.nltgv),
                                            regionOf(c, d.integrator)};
@@ -157,7 +157,8 @@ TEST(ConfigTable, CoversEveryMemberOfEveryStruct) {
        directMembersInTable(offsets, regionOf(c, c.triangulation), {})},
       {"optimization::BaOptions", memberCount<vitamin_e::optimization::BaOptions>(),
        directMembersInTable(offsets, regionOf(c, c.ba), {})},
-      {"map::MapConfig", memberCount<vitamin_e::map::MapConfig>(), directMembersInTable(offsets, regionOf(c, c.map), {})},
+      {"map::MapConfig", memberCount<vitamin_e::map::MapConfig>(),
+       directMembersInTable(offsets, regionOf(c, c.map), {})},
       {"pipeline::RelocalizerConfig", memberCount<pl::RelocalizerConfig>(),
        directMembersInTable(offsets, regionOf(c, c.relocalization), {})},
       {"fusion::DenseMapperConfig", memberCount<vitamin_e::fusion::DenseMapperConfig>(),
@@ -231,10 +232,10 @@ TEST_F(ConfigFile, EveryKeyIsReadFromTheYaml) {
     if (!f.internal.empty()) continue;
     EXPECT_EQ(loadError(f.section + ":\n  " + f.key + ": " + f.value + "\n"), "") << f.section << "." << f.key;
   }
-  const pl::SystemConfig c = pl::loadSystemConfig(
-      write("tracker:\n  max_curvature_ratio: 2.5\n  align_iterations: 3\n  refine_flow: false\n"
-            "ba:\n  camera_solver: gauss_seidel\n  point_extrapolation: 4\n"
-            "dense:\n  nltgv_alpha: 2.0\n  block_voxels: 16\n  mesh_max_edge_px: 33\n"));
+  const pl::SystemConfig c =
+      pl::loadSystemConfig(write("tracker:\n  max_curvature_ratio: 2.5\n  align_iterations: 3\n  refine_flow: false\n"
+                                 "ba:\n  camera_solver: gauss_seidel\n  point_extrapolation: 4\n"
+                                 "dense:\n  nltgv_alpha: 2.0\n  block_voxels: 16\n  mesh_max_edge_px: 33\n"));
   EXPECT_EQ(c.tracker.max_curvature_ratio, 2.5);
   EXPECT_EQ(c.tracker.align_iterations, 3);
   EXPECT_FALSE(c.tracker.refine_flow);

@@ -49,7 +49,7 @@ TEST(RosMapFrame, UpHeadingAndCameraAxes) {
   const Eigen::Vector3d view_map = T_map_w.linear() * Eigen::Vector3d::UnitZ();
   EXPECT_NEAR(view_map.y(), 0.0, 1e-12);
   EXPECT_GT(view_map.x(), 0.0);
-  EXPECT_LT(view_map.z(), 0.0);  // pitched down
+  EXPECT_LT(view_map.z(), 0.0);                                    // pitched down
   EXPECT_TRUE((T_map_w * Eigen::Vector3d::Zero()).isZero(1e-12));  // origin at the first camera
   // Looking straight down: the heading comes from the camera's up instead of a 0/0.
   const Eigen::Isometry3d down = mapFromUp(Eigen::Vector3d(0, 0, -1), T_w_c0);
@@ -90,20 +90,23 @@ TEST(RosMapFrame, GravityWindowRotatesEachSampleByItsPose) {
   for (int k = 0; k < 400; ++k) {  // 200 Hz from 9.0 s to 11.0 s
     const double t = 9.0 + 0.005 * k;
     const Eigen::Matrix3d R_w_c = orientationAt(trajectory, t);
-    const Eigen::Vector3d f_imu = R_c_imu.transpose() * (R_w_c.transpose() * (9.81 * up_w)) +
-                                  Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    const Eigen::Vector3d f_imu =
+        R_c_imu.transpose() * (R_w_c.transpose() * (9.81 * up_w)) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
     window.add(t, f_imu);
   }
   window.add(10.5, Eigen::Vector3d(100, 100, 100));  // out of order: ignored
-  const auto e = window.upInWorld(11.0, 1.0, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
+  const auto e = window.upInWorld(
+      11.0, 1.0, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
   ASSERT_TRUE(e.ok) << e.message;
   EXPECT_GE(e.samples, 199);
   EXPECT_NEAR(e.magnitude, 9.81, 0.05);
   EXPECT_LT(angleDeg(e.up_w, up_w), 0.1);
-  const auto fixed = window.upInWorld(11.0, 1.0, [&](double) { return trajectory.back().T_w_c.rotation(); }, R_c_imu);
+  const auto fixed = window.upInWorld(
+      11.0, 1.0, [&](double) { return trajectory.back().T_w_c.rotation(); }, R_c_imu);
   EXPECT_GT(angleDeg(fixed.up_w, up_w), 2.0) << "the test does not need per-sample rotation";
   // Too few samples: no estimate, a reason.
-  const auto none = window.upInWorld(5.0, 1.0, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
+  const auto none = window.upInWorld(
+      5.0, 1.0, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
   EXPECT_FALSE(none.ok);
   EXPECT_FALSE(none.message.empty());
   // The clock going back by more than a second (a bag loop) starts the window over.

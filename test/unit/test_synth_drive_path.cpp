@@ -107,8 +107,8 @@ TEST(SynthDrivePath, DriveIsStraightTurnFastStraightTurn) {
     min_yaw = std::min(min_yaw, p.yawRate(t));
   }
   EXPECT_NEAR(max_speed, 8.5, 1e-6);
-  EXPECT_NEAR(max_yaw, 30.0 * kDeg, 1e-3);   // the left turn
-  EXPECT_NEAR(min_yaw, -30.0 * kDeg, 1e-3);  // the right turn
+  EXPECT_NEAR(max_yaw, 30.0 * kDeg, 1e-3);          // the left turn
+  EXPECT_NEAR(min_yaw, -30.0 * kDeg, 1e-3);         // the right turn
   EXPECT_NEAR(p.heading(p.duration()), 0.0, 1e-9);  // left then right: heading +x again
   EXPECT_GT(p.duration(), 30.0);
 }

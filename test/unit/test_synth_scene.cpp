@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 #include <yaml-cpp/yaml.h>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "vitamin_e/camera/camera.h"
@@ -26,7 +26,8 @@ namespace {
 
 class TempDir {
  public:
-  TempDir() : path_(fs::temp_directory_path() / ("ve_synth_" + std::to_string(::getpid()) + "_" + std::to_string(n_++))) {
+  TempDir()
+      : path_(fs::temp_directory_path() / ("ve_synth_" + std::to_string(::getpid()) + "_" + std::to_string(n_++))) {
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
@@ -146,7 +147,8 @@ TEST(SynthScene, RoomGeometryAndBoxesClearOfThePath) {
   EXPECT_EQ(scene.faces().size(), 6u + 6u * scene.boxes().size());
   for (const auto& p : path.samplePositions(30.0, 0.1)) {
     for (const auto& b : scene.boxes()) EXPECT_GE((p.cwiseMax(b.min).cwiseMin(b.max) - p).norm(), 0.99);
-    EXPECT_TRUE((p.array() > scene.room().min.array() + 1.0).all() && (p.array() < scene.room().max.array() - 1.0).all());
+    EXPECT_TRUE((p.array() > scene.room().min.array() + 1.0).all() &&
+                (p.array() < scene.room().max.array() - 1.0).all());
   }
   // Every ray from the path hits something, and the hit lies on the face reported.
   vs::Rng rng(1);

@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "vitamin_e/camera/camera.h"
 #include "vitamin_e/synth/renderer.h"
@@ -31,7 +31,8 @@ namespace {
 
 class TempDir {
  public:
-  TempDir() : path_(fs::temp_directory_path() / ("ve_street_" + std::to_string(::getpid()) + "_" + std::to_string(n_++))) {
+  TempDir()
+      : path_(fs::temp_directory_path() / ("ve_street_" + std::to_string(::getpid()) + "_" + std::to_string(n_++))) {
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
@@ -115,7 +116,7 @@ TEST(SynthStreet, LayoutPutsThePathInTheRightLaneOfItsStreets) {
       EXPECT_GE(std::abs(o.offset - st.offset), cfg.block_min_m - 1e-9) << "parallel streets too close";
     }
   }
-  EXPECT_EQ(on_path, 2);  // the street before the turn (along x) and after it (along y)
+  EXPECT_EQ(on_path, 2);            // the street before the turn (along x) and after it (along y)
   ASSERT_GE(L.streets.size(), 3u);  // and side streets
   EXPECT_EQ(L.streets[0].axis, 0);
   EXPECT_NEAR(L.streets[0].offset, 1.5, 1e-9);  // the path at y = 0 drives 1.5 m right of the centre line
@@ -262,7 +263,8 @@ TEST(SynthStreet, RenderedDepthMatchesUnculledRayCasting) {
           ++sky;
           continue;
         }
-        ASSERT_NEAR(depth.at<float>(v, u), hit.t * b.normalized().z(), 1e-3 * hit.t) << "t " << t << " pixel " << u << "," << v;
+        ASSERT_NEAR(depth.at<float>(v, u), hit.t * b.normalized().z(), 1e-3 * hit.t)
+            << "t " << t << " pixel " << u << "," << v;
         ++hits;
       }
     }
@@ -332,7 +334,8 @@ TEST(SynthStreet, FacadesAreRichAndNotOneRepeatedTile) {
     // Patches of 1.3 m: windows repeat, but most patches match nowhere else
     // and none matches elsewhere perfectly (as a repeated tile would).
     for (int n = 0; n < 8; ++n, ++patches) {
-      const cv::Rect patch(static_cast<int>(rng.uniform(0, tex.cols - 64)), static_cast<int>(rng.uniform(0, tex.rows - 64)), 64, 64);
+      const cv::Rect patch(static_cast<int>(rng.uniform(0, tex.cols - 64)),
+                           static_cast<int>(rng.uniform(0, tex.rows - 64)), 64, 64);
       const auto [best, strong] = matchesElsewhere(tex, patch);
       EXPECT_LT(best, 0.985) << "face " << facades[k].second << " patch at " << patch.x << "," << patch.y;
       if (strong > 0) ++repeated;
@@ -345,7 +348,8 @@ TEST(SynthStreet, FacadesAreRichAndNotOneRepeatedTile) {
   cv::repeat(textures[0](cv::Rect(0, 0, 150, 150)), 4, 4, tiled);
   int tiled_repeated = 0;
   for (int n = 0; n < 8; ++n) {
-    const cv::Rect patch(static_cast<int>(rng.uniform(0, tiled.cols - 64)), static_cast<int>(rng.uniform(0, tiled.rows - 64)), 64, 64);
+    const cv::Rect patch(static_cast<int>(rng.uniform(0, tiled.cols - 64)),
+                         static_cast<int>(rng.uniform(0, tiled.rows - 64)), 64, 64);
     const auto [best, strong] = matchesElsewhere(tiled, patch);
     if (strong > 0 && best > 0.999) ++tiled_repeated;
   }

@@ -82,10 +82,11 @@ ve::eval::EvalResult evaluate(const std::string& name) {
 void report(const std::string& name) {
   const auto& r = run(name);
   const auto [tracked, total] = trackedAfterInit(r);
-  std::printf("[driving %s] %zu frames, %.1f m: first map at frame %lld, tracked after it %d/%d, re-initializations %d, "
-              "SLAM %.1f s\n",
-              name.c_str(), clip(name).images.size(), clip(name).path_length_m, r.first_init_frame, tracked, total,
-              r.init_retries, r.seconds);
+  std::printf(
+      "[driving %s] %zu frames, %.1f m: first map at frame %lld, tracked after it %d/%d, re-initializations %d, "
+      "SLAM %.1f s\n",
+      name.c_str(), clip(name).images.size(), clip(name).path_length_m, r.first_init_frame, tracked, total,
+      r.init_retries, r.seconds);
   if (r.estimate.size() >= 3) {
     const auto e = evaluate(name);
     std::printf("[driving %s] Sim(3) ATE rmse %.3f m (%.2f%% of the path), matched %zu/%zu, scale %.3f\n", name.c_str(),
@@ -101,7 +102,8 @@ void expectTracksEveryFrameAfterAnEarlyInit(const std::string& name, long long i
   int lost = 0;
   for (std::size_t i = static_cast<std::size_t>(r.first_init_frame); i < r.results.size(); ++i) {
     if (r.results[i].state != TrackingState::kTracking && ++lost <= 5)
-      ADD_FAILURE() << "frame " << i << ": " << ve::pipeline::toString(r.results[i].state) << " " << r.results[i].message;
+      ADD_FAILURE() << "frame " << i << ": " << ve::pipeline::toString(r.results[i].state) << " "
+                    << r.results[i].message;
   }
   EXPECT_EQ(lost, 0) << "frames without a pose after the first map";
   EXPECT_EQ(r.init_retries, 0);
@@ -121,7 +123,8 @@ void expectSmallAteAndSteadyScale(const std::string& name) {
   const auto& gt = clip(name).ground_truth;
   for (int third = 0; third < 3; ++third) {
     const std::size_t a = third * (n - 1) / 3, b = (third + 1) * (n - 1) / 3;
-    const double est = (e.aligned[e.pairs[b].first].T_w_c.translation() - e.aligned[e.pairs[a].first].T_w_c.translation()).norm();
+    const double est =
+        (e.aligned[e.pairs[b].first].T_w_c.translation() - e.aligned[e.pairs[a].first].T_w_c.translation()).norm();
     const double truth = (gt[e.pairs[b].second].T_w_c.translation() - gt[e.pairs[a].second].T_w_c.translation()).norm();
     EXPECT_NEAR(est / truth, 1.0, 0.1) << "third " << third << ": " << est << " m estimated, " << truth << " m true";
   }
@@ -185,7 +188,8 @@ TEST(SystemDriving, ClipsHaveTheClaimedMotion) {
   EXPECT_LE(max_step, 0.36);
   double fast_max = 0.0;
   for (std::size_t i = 1; i < fast.ground_truth.size(); ++i)
-    fast_max = std::max(fast_max, (fast.ground_truth[i].T_w_c.translation() - fast.ground_truth[i - 1].T_w_c.translation()).norm());
+    fast_max = std::max(
+        fast_max, (fast.ground_truth[i].T_w_c.translation() - fast.ground_truth[i - 1].T_w_c.translation()).norm());
   EXPECT_NEAR(fast_max, 1.5, 0.01);  // 15 m/s at 10 Hz
   EXPECT_GT(fast.path_length_m, 100.0);
 }

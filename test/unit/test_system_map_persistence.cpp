@@ -36,8 +36,8 @@ namespace {
 constexpr int kWidth = 376;
 constexpr int kHeight = 240;
 constexpr double kRate = 20.0;
-constexpr int kFrames = 200;       // the whole trip: out 5 m in 5 s and back
-constexpr int kSecondStart = 40;   // the second run starts here: 1.73 m from the first run's start
+constexpr int kFrames = 200;      // the whole trip: out 5 m in 5 s and back
+constexpr int kSecondStart = 40;  // the second run starts here: 1.73 m from the first run's start
 constexpr int kSecondFrames = 100;
 constexpr double kT0 = 50.0;
 

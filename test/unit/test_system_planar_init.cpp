@@ -41,9 +41,7 @@ constexpr double kTripM = 4.0;  // sideways, cosine profile: from rest, 1.26 m/s
 // its wall turned into nearly the whole view: x from -2 to +2 m at y = 1 m, 2 m
 // from the room's +y wall, facing it (yaw pi/2 with a small wobble), pitched
 // down 0.15 rad instead of 0.4.
-Eigen::Isometry3d cameraPose(double t) {
-  return ve::test::wallTripPose(t, 2.0 * kFrames / kRate, kTripM, -0.15);
-}
+Eigen::Isometry3d cameraPose(double t) { return ve::test::wallTripPose(t, 2.0 * kFrames / kRate, kTripM, -0.15); }
 
 struct WallRun {
   std::vector<ve::pipeline::FrameResult> results;

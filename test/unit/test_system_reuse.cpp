@@ -31,19 +31,17 @@ namespace {
 constexpr int kWidth = 376;  // half the EuRoC size: about 12 ms per frame in Release
 constexpr int kHeight = 240;
 constexpr double kRate = 20.0;
-constexpr int kFrames = 200;              // 10 s: out in 5 s, back in 5 s
-constexpr int kTurnFrame = kFrames / 2;   // the far end of the trip
-constexpr double kTripM = 5.0;            // sideways distance out (and back)
-constexpr double kT0 = 50.0;              // timestamp of frame 0 [s]
+constexpr int kFrames = 200;             // 10 s: out in 5 s, back in 5 s
+constexpr int kTurnFrame = kFrames / 2;  // the far end of the trip
+constexpr double kTripM = 5.0;           // sideways distance out (and back)
+constexpr double kT0 = 50.0;             // timestamp of frame 0 [s]
 
 // The camera at time t [s]: x goes -2.5 m -> +2.5 m -> -2.5 m (cosine profile,
 // at rest at both ends, at most 1.6 m/s) at y = 1 m, 2 m from the room's +y
 // wall, looking at it and down at the floor (0.4 rad: a scene with depth, not
 // a plane), with a small height and yaw wobble so that outbound and return
 // views are not pixel copies of each other.
-Eigen::Isometry3d cameraPose(double t) {
-  return ve::test::wallTripPose(t, kFrames / kRate, kTripM, -0.4);
-}
+Eigen::Isometry3d cameraPose(double t) { return ve::test::wallTripPose(t, kFrames / kRate, kTripM, -0.4); }
 
 struct ReturnTrip {
   std::vector<ve::pipeline::FrameResult> results;
@@ -116,7 +114,8 @@ double returnDrift(const ReturnTrip& run) {
   for (int i = 1; i < kFrames / 4; ++i) {
     const int j = kFrames - i;
     if (aligned_of[i] < 0 || aligned_of[j] < 0) continue;
-    const Eigen::Vector3d est = r.aligned[aligned_of[j]].T_w_c.translation() - r.aligned[aligned_of[i]].T_w_c.translation();
+    const Eigen::Vector3d est =
+        r.aligned[aligned_of[j]].T_w_c.translation() - r.aligned[aligned_of[i]].T_w_c.translation();
     const Eigen::Vector3d gt = run.ground_truth[j].T_w_c.translation() - run.ground_truth[i].T_w_c.translation();
     sum += (est - gt).norm();
     ++n;

@@ -125,8 +125,8 @@ void expectSaneOutput(const SlamRun& run, double max_step = 0.3,
     EXPECT_GT(traj[i].timestamp, traj[i - 1].timestamp) << "trajectory pose " << i;
     if (traj[i - 1].timestamp < unbounded_step_at && traj[i].timestamp >= unbounded_step_at) continue;
     const double step = (traj[i].T_w_c.translation() - traj[i - 1].T_w_c.translation()).norm();
-    EXPECT_LT(step, max_step) << "trajectory jumps between t=" << traj[i - 1].timestamp << " and t="
-                              << traj[i].timestamp;
+    EXPECT_LT(step, max_step) << "trajectory jumps between t=" << traj[i - 1].timestamp
+                              << " and t=" << traj[i].timestamp;
   }
   for (const auto& p : run.system.mapPoints()) ASSERT_TRUE(p.p_w.allFinite());
 }
@@ -194,8 +194,8 @@ TEST(Robustness, DuplicateBackwardAndNonFiniteStampsAreSkipped) {
   const std::size_t processed = run.system.framesProcessed();
   const std::size_t traj = run.system.trajectory().size();
   const double last = frameTime(i - 1);
-  for (const double bad : {last, last - 0.5, std::numeric_limits<double>::quiet_NaN(),
-                           std::numeric_limits<double>::infinity()}) {
+  for (const double bad :
+       {last, last - 0.5, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
     const FrameResult& r = run.feed(w.frame(i), bad);
     EXPECT_FALSE(r.pose_valid);
     EXPECT_NE(r.message.find("skipped"), std::string::npos) << r.message;
@@ -474,9 +474,11 @@ TEST_F(ConfigFiles, MalformedYamlGivesAConfigErrorNamingTheFileAndKey) {
   expectConfigError(write("section.yaml", "pipeline: 3\n"), {"pipeline", "must be a map"});
   expectConfigError(write("unknown.yaml", "pipeline:\n  min_pose_inlier: 30\n"), {"pipeline.min_pose_inlier"});
   expectConfigError(write("section2.yaml", "pipelines:\n  min_pose_inliers: 30\n"), {"pipelines.min_pose_inliers"});
-  expectConfigError(write("word.yaml", "pipeline:\n  min_pose_inliers: thirty\n"), {"pipeline.min_pose_inliers", "thirty"});
+  expectConfigError(write("word.yaml", "pipeline:\n  min_pose_inliers: thirty\n"),
+                    {"pipeline.min_pose_inliers", "thirty"});
   expectConfigError(write("float.yaml", "pipeline:\n  min_pose_inliers: 30.5\n"), {"pipeline.min_pose_inliers"});
-  expectConfigError(write("huge.yaml", "pipeline:\n  min_pose_inliers: 1e30\n"), {"pipeline.min_pose_inliers", "range"});
+  expectConfigError(write("huge.yaml", "pipeline:\n  min_pose_inliers: 1e30\n"),
+                    {"pipeline.min_pose_inliers", "range"});
   expectConfigError(write("nan.yaml", "pipeline:\n  max_reprojection_px: .nan\n"), {"pipeline.max_reprojection_px"});
   expectConfigError(write("range.yaml", "pipeline:\n  max_reprojection_px: -1\n"), {"pipeline.max_reprojection_px"});
   expectConfigError(write("seq.yaml", "pipeline:\n  max_reprojection_px: [1, 2]\n"), {"pipeline.max_reprojection_px"});

@@ -13,9 +13,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -254,8 +254,9 @@ TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
   // relocalizer, no initialization, the file untouched.
   const fs::path out2 = dir_ / "out_localize";
   const std::string base = "--dataset " + (dir_ / "seq").string() + " --max-frames 60 --quiet";
-  ASSERT_EQ(runToEnd(runner_, base + " --out " + out2.string() + " --load-map " + map + " --localization-only" +
-                                  " --load-tsdf " + tsdf,
+  ASSERT_EQ(runToEnd(runner_,
+                     base + " --out " + out2.string() + " --load-map " + map + " --localization-only" +
+                         " --load-tsdf " + tsdf,
                      dir_ / "localize.stderr", &err),
             0)
       << err;
@@ -268,8 +269,8 @@ TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
 
   // Bad map files: one error line, exit code 2.
   auto expectRefused = [&](const std::string& args, const std::string& what) {
-    const int code = runToEnd(runner_, base + " --out " + (dir_ / "out_bad").string() + " " + args,
-                              dir_ / "bad.stderr", &err);
+    const int code =
+        runToEnd(runner_, base + " --out " + (dir_ / "out_bad").string() + " " + args, dir_ / "bad.stderr", &err);
     EXPECT_EQ(code, 2) << args << ": " << err;
     EXPECT_EQ(err.rfind("error: ", 0), 0u) << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
@@ -323,8 +324,8 @@ TEST_F(RunnerSignal, LogFramesAndStatsCarryTheCounters) {
     std::string state;
     ASSERT_TRUE(static_cast<bool>(ls >> index >> stamp >> state >> tracks >> mapped >> ms)) << line;
     EXPECT_EQ(index, n) << line;
-    for (const char* key : {"born", "lost", "dropped", "prev_map", "pose", "reuse", "kf", "kf_par", "tri", "cand",
-                            "cand_par", "kfs"}) {
+    for (const char* key :
+         {"born", "lost", "dropped", "prev_map", "pose", "reuse", "kf", "kf_par", "tri", "cand", "cand_par", "kfs"}) {
       EXPECT_GE(tokenValue(line, key), 0) << key << " missing: " << line;
     }
     const long b = tokenValue(line, "born"), l = tokenValue(line, "lost"), d = tokenValue(line, "dropped");
@@ -349,8 +350,8 @@ TEST_F(RunnerSignal, LogFramesAndStatsCarryTheCounters) {
   EXPECT_EQ(fd["tracks_dropped"]["sum"].as<long>(), dropped);
   EXPECT_EQ(fd["triangulated"]["sum"].as<long>(), triangulated);
   EXPECT_EQ(fd["keyframe"]["sum"].as<long>(), keyframes);
-  for (const char* key : {"prev_map_tracked_fraction", "mapped_tracks", "candidates", "candidate_parallax_deg",
-                          "pose_inliers"}) {
+  for (const char* key :
+       {"prev_map_tracked_fraction", "mapped_tracks", "candidates", "candidate_parallax_deg", "pose_inliers"}) {
     ASSERT_TRUE(fd[key].IsMap()) << key;
     EXPECT_GE(fd[key]["max"].as<double>(), fd[key]["median"].as<double>()) << key;
   }

@@ -126,7 +126,7 @@ TEST(SystemSynthetic, FrameDiagnosticsAddUp) {
   const SyntheticRun& run = firstRun();
   int keyframes = 0, triangulated = 0, with_candidates = 0, init_frames = 0, dropped = 0;
   int intervals = 0, grew = 0;  // keyframe intervals, those over which the candidates' parallax grew
-  int interval_frames = 0;  // frames with candidates since the last keyframe
+  int interval_frames = 0;      // frames with candidates since the last keyframe
   double interval_start = 0.0, interval_end = 0.0;
   std::vector<double> survival;
   for (std::size_t i = 0; i < run.results.size(); ++i) {

@@ -36,8 +36,7 @@ std::vector<Blob> randomBlobs(int n, int w, int h, unsigned seed) {
   return b;
 }
 
-cv::Mat renderBlobs(const std::vector<Blob>& blobs, int w, int h, const Eigen::Matrix2d& A,
-                    const Eigen::Vector2d& t) {
+cv::Mat renderBlobs(const std::vector<Blob>& blobs, int w, int h, const Eigen::Matrix2d& A, const Eigen::Vector2d& t) {
   // Image(u) = texture(A^-1 (u - t)).
   const Eigen::Matrix2d Ai = A.inverse();
   cv::Mat img(h, w, CV_8UC1);
@@ -85,8 +84,8 @@ TEST(Curvature, GaussianBlobExtremaCentredOnBlob) {
   cv::Mat img(h, w, CV_32FC1);
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u)
-      img.at<float>(v, u) = static_cast<float>(
-          20.0 + 200.0 * std::exp(-((u - cx) * (u - cx) + (v - cy) * (v - cy)) / (2 * s * s)));
+      img.at<float>(v, u) =
+          static_cast<float>(20.0 + 200.0 * std::exp(-((u - cx) * (u - cx) + (v - cy) * (v - cy)) / (2 * s * s)));
   cv::Mat kappa;
   vt::computeCurvature(img, 1.0, &kappa);
   std::vector<vt::Extremum> ex;
@@ -272,11 +271,11 @@ TEST(Curvature, PeakSharpnessSeparatesPeaksFromRidgesAndSaddles) {
   }
   const Eigen::Vector2i p(c, c);
   const double expect = 2.0 * (1.0 - std::exp(-1.0 / (2 * s * s)));
-  EXPECT_NEAR(vt::peakSharpness(round, p, -1.f), expect, 1e-3);   // a minimum of kappa climbed as -kappa
-  EXPECT_EQ(vt::peakSharpness(round, p, 1.f), 0.f);                // wrong sign: not a peak
+  EXPECT_NEAR(vt::peakSharpness(round, p, -1.f), expect, 1e-3);  // a minimum of kappa climbed as -kappa
+  EXPECT_EQ(vt::peakSharpness(round, p, 1.f), 0.f);              // wrong sign: not a peak
   EXPECT_NEAR(vt::peakSharpness(ridge, p, 1.f), 0.0, 1e-6);
   EXPECT_LT(vt::peakSharpness(saddle, p, 1.f), 0.f);
-  const float e = vt::peakSharpness(elong, p, 1.f);                 // 4x longer along y: 16x flatter
+  const float e = vt::peakSharpness(elong, p, 1.f);  // 4x longer along y: 16x flatter
   EXPECT_GT(e, 0.f);
   EXPECT_LT(e, 0.1 * expect);
   EXPECT_EQ(vt::peakSharpness(round, Eigen::Vector2i(0, 5), -1.f), 0.f);  // border
@@ -426,8 +425,8 @@ TEST(DenseTracker, PatchConfirmationEndsJumpedTracks) {
   const Eigen::Vector2d t(2.3, -1.4);
   const cv::Mat i0 = withNoise(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 1);
   const cv::Mat i1 = withNoise(renderBlobs(blobs, w, h, Eigen::Matrix2d::Identity(), t), 2);
-  const cv::Mat other = withNoise(renderBlobs(randomBlobs(700, w, h, 99), w, h, Eigen::Matrix2d::Identity(),
-                                          Eigen::Vector2d::Zero()), 3);
+  const cv::Mat other =
+      withNoise(renderBlobs(randomBlobs(700, w, h, 99), w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), 3);
   struct Result {
     std::vector<double> err;
     int tracked = 0, unconfirmed = 0;

@@ -129,9 +129,9 @@ void expectTracksSurvive(const vt::TrackerConfig& cfg, double g) {
   const StepResult r = trackThroughStep(cfg, g);
   ASSERT_GT(r.before, 150) << "too few tracks before the step for the test to mean anything";
   EXPECT_GE(r.continued, 0.8 * r.before) << "gain " << g << ": " << r.continued << " of " << r.before
-                                          << " tracks continued";
-  EXPECT_GE(r.within_1px, 0.8 * r.before) << "gain " << g << ": " << r.within_1px << " of " << r.before
-                                           << " tracks continued within 1 px";
+                                         << " tracks continued";
+  EXPECT_GE(r.within_1px, 0.8 * r.before)
+      << "gain " << g << ": " << r.within_1px << " of " << r.before << " tracks continued within 1 px";
   EXPECT_GE(r.within_1px, 0.98 * r.continued) << "gain " << g;
   EXPECT_GE(r.next, 0.8 * r.within_1px) << "gain " << g << ": " << r.next << " of " << r.within_1px
                                         << " tracks went on into the frame after the step";

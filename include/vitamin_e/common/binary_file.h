@@ -50,7 +50,8 @@ class BinaryWriter {
 // Reads a payload; every failure throws BinaryFileError("<what>: ...").
 class BinaryReader {
  public:
-  BinaryReader(const char* data, std::size_t size, std::string what) : p_(data), end_(data + size), what_(std::move(what)) {}
+  BinaryReader(const char* data, std::size_t size, std::string what)
+      : p_(data), end_(data + size), what_(std::move(what)) {}
   template <typename T>
   T get() {
     static_assert(std::is_arithmetic<T>::value, "get() returns numbers");

@@ -21,7 +21,7 @@ struct EvalConfig {
   // Given: this estimate -> ground truth transform is applied as it is instead
   // of fitting one (e.g. the one fitted on an earlier run in the same map).
   std::optional<Sim3> given_alignment;
-  void validate() const;     // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 struct ErrorStats {
@@ -35,14 +35,14 @@ struct EvalResult {
   std::size_t ground_truth_poses = 0;
   std::size_t matched = 0;
   std::size_t frames = 0;
-  double success_rate = 0.0;     // matched / frames
-  Sim3 alignment;                // estimate -> ground truth
-  ErrorStats ate;                // position error after alignment [m]
-  ErrorStats rpe_frame;          // translational RPE over 1 matched frame [m]
-  ErrorStats rpe_delta;          // translational RPE over rpe_delta_s [m]
-  Association pairs;             // (estimate index, ground-truth index)
-  std::vector<double> errors;    // per pair, metres
-  Trajectory aligned;            // every estimate pose mapped by alignment
+  double success_rate = 0.0;   // matched / frames
+  Sim3 alignment;              // estimate -> ground truth
+  ErrorStats ate;              // position error after alignment [m]
+  ErrorStats rpe_frame;        // translational RPE over 1 matched frame [m]
+  ErrorStats rpe_delta;        // translational RPE over rpe_delta_s [m]
+  Association pairs;           // (estimate index, ground-truth index)
+  std::vector<double> errors;  // per pair, metres
+  Trajectory aligned;          // every estimate pose mapped by alignment
 };
 
 // Throws TrajectoryError if fewer than 3 poses associate (the message says how

@@ -28,10 +28,10 @@ struct DenseMapperConfig {
   meshing::FrameMesherConfig mesher = lenientMesherConfig();  // building the frame mesh
   meshing::FrameMesherConfig prune;                           // pruning after NLTGV
   meshing::NltgvConfig nltgv;
-  bool denoise = true;           // NLTGV smoothing of each frame mesh before fusion
+  bool denoise = true;  // NLTGV smoothing of each frame mesh before fusion
   TsdfIntegratorConfig integrator;
-  int min_points = 30;           // frames with fewer triangulated points are not meshed
-  void validate() const;         // throws std::invalid_argument naming the key
+  int min_points = 30;    // frames with fewer triangulated points are not meshed
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 struct DenseFrameStats {

@@ -15,7 +15,6 @@ struct TriangleMesh {
 // Writes a PLY file (binary little endian by default, ascii on request) with
 // vertex positions, normals (when present) and faces. Returns false (and fills
 // *error) when the file cannot be written.
-bool saveMeshPly(const TriangleMesh& mesh, const std::string& path, std::string* error = nullptr,
-                 bool binary = true);
+bool saveMeshPly(const TriangleMesh& mesh, const std::string& path, std::string* error = nullptr, bool binary = true);
 
 }  // namespace vitamin_e::fusion

@@ -28,17 +28,17 @@ namespace vitamin_e::fusion {
 struct TsdfConfig {
   // Lengths are in the unit of the poses and depths given: map units in the SLAM.
   double voxel_size = 0.05;
-  double truncation = 0.15;    // band half-width around the surface
-  double max_weight = 100.0;   // cap of the running weight
-  int block_voxels = 8;        // voxels per block side
-  double min_depth = 0.1;      // rasterised depths outside [min_depth, max_depth] are ignored
+  double truncation = 0.15;   // band half-width around the surface
+  double max_weight = 100.0;  // cap of the running weight
+  int block_voxels = 8;       // voxels per block side
+  double min_depth = 0.1;     // rasterised depths outside [min_depth, max_depth] are ignored
   double max_depth = 20.0;
   double min_extract_weight = 0.5;  // voxels lighter than this count as unobserved
   // Measurement weight min(1, (weight_depth_ref / z)^2) (depth noise grows with
   // z^2 for triangulated points); 0: every measurement weighs 1.
   double weight_depth_ref = 0.0;
-  int raster_downscale = 1;    // depth map at (width, height) / raster_downscale
-  void validate() const;       // throws std::invalid_argument naming the key
+  int raster_downscale = 1;  // depth map at (width, height) / raster_downscale
+  void validate() const;     // throws std::invalid_argument naming the key
 };
 
 // A TSDF file that cannot be read or does not fit the volume (TsdfVolume::load).

@@ -13,16 +13,16 @@ namespace vitamin_e {
 namespace geometry {
 
 struct PnpConfig {
-  double focal_px = 450.0;            // converts pixel thresholds to normalized units
-  double ransac_threshold_px = 2.0;   // inlier threshold (reprojection error, pixels)
+  double focal_px = 450.0;           // converts pixel thresholds to normalized units
+  double ransac_threshold_px = 2.0;  // inlier threshold (reprojection error, pixels)
   double confidence = 0.999;
-  int max_iterations = 200;           // RANSAC iterations
+  int max_iterations = 200;  // RANSAC iterations
   int min_inliers = 12;
-  double min_inlier_ratio = 0.2;      // of the input correspondences
-  double robust_sigma_px = 2.0;       // Geman-McClure sigma of the refinement
+  double min_inlier_ratio = 0.2;  // of the input correspondences
+  double robust_sigma_px = 2.0;   // Geman-McClure sigma of the refinement
   int refine_iterations = 10;
   double guess_min_inlier_ratio = 0.6;  // the guess is used directly when this many agree
-  void validate() const;  // throws std::invalid_argument naming the key
+  void validate() const;                // throws std::invalid_argument naming the key
 };
 
 struct PnpResult {

@@ -42,7 +42,7 @@ inline void reprojectionJacobians(const camera::Pinhole& K, const Eigen::Vector3
                                   Matrix26d* J_cam, Matrix23d* J_point) {
   const Matrix23d Jproj = K.projectPointJacobian(p_c);
   if (J_cam) {
-    J_cam->leftCols<3>() = Jproj;               // -(Jproj * -I)
+    J_cam->leftCols<3>() = Jproj;                // -(Jproj * -I)
     J_cam->rightCols<3>() = -Jproj * skew(p_c);  // -(Jproj * [p_c]x)
   }
   if (J_point) *J_point = -Jproj * R_w_c.transpose();

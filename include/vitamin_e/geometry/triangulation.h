@@ -23,16 +23,15 @@ struct TriangulationResult {
   bool ok = false;
   std::string reason;  // empty when ok
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
-  double parallax_deg = 0.0;              // largest angle between two viewing rays at p_w
-  std::vector<double> reproj_error_px;    // per view, at p_w
-  bool cheirality_ok = false;             // in front of every camera
+  double parallax_deg = 0.0;            // largest angle between two viewing rays at p_w
+  std::vector<double> reproj_error_px;  // per view, at p_w
+  bool cheirality_ok = false;           // in front of every camera
 };
 
 // T_w_c[k] and xy[k] describe view k (at least two views). Returns the point even when a check
 // fails (ok=false, reason says which) as long as the linear system was solvable.
 TriangulationResult triangulatePoint(const std::vector<Eigen::Isometry3d>& T_w_c,
-                                     const std::vector<Eigen::Vector2d>& xy,
-                                     const TriangulationConfig& config);
+                                     const std::vector<Eigen::Vector2d>& xy, const TriangulationConfig& config);
 
 // Linear DLT only (homogeneous SVD of the 2n x 4 system). Returns false when the point is at
 // infinity (homogeneous w ~ 0).

@@ -39,9 +39,9 @@ struct TwoViewConfig {
   int min_points = 50;               // valid triangulated points
   double confidence = 0.999;
   int max_iterations = 1000;
-  double max_reproj_error_px = 2.0;       // per triangulated point, both views
-  double point_min_parallax_deg = 0.05;   // points below this are kept invalid (near infinity)
-  double rotation_only_max_ratio = 0.9;   // refuse if rotation-only inliers >= this * essential inliers
+  double max_reproj_error_px = 2.0;      // per triangulated point, both views
+  double point_min_parallax_deg = 0.05;  // points below this are kept invalid (near infinity)
+  double rotation_only_max_ratio = 0.9;  // refuse if rotation-only inliers >= this * essential inliers
   // Planar scenes (see the header comment): when a homography explains at least
   // planar_min_ratio of the essential inliers (> 1: never tested), its motions compete with the
   // essential one on the number of points triangulated in front of both cameras.
@@ -49,9 +49,9 @@ struct TwoViewConfig {
   // A homography motion replaces the essential one only if it triangulates at least
   // (1 + this) times as many points in front of both cameras (the twisted motion: about 2x).
   double homography_min_gain = 0.2;
-  double planar_distinct_deg = 30.0;     // translations further apart than this are different motions
-  double ambiguous_rival_ratio = 0.9;    // ambiguous if a different motion triangulates >= this * the best's points
-  bool refuse_ambiguous = false;         // true: an ambiguous result is refused (ok=false); false: flagged only
+  double planar_distinct_deg = 30.0;   // translations further apart than this are different motions
+  double ambiguous_rival_ratio = 0.9;  // ambiguous if a different motion triangulates >= this * the best's points
+  bool refuse_ambiguous = false;       // true: an ambiguous result is refused (ok=false); false: flagged only
   // Refuse if fewer than this * essential inliers triangulate in front of both cameras. The
   // twisted motion of a plane puts about half of them behind a camera (47-54 % in front
   // measured); the true motion, 99.8-100 % in the synthetic tests.
@@ -66,13 +66,13 @@ struct TwoViewResult {
   std::vector<Eigen::Vector3d> points_c0;  // per correspondence, in camera 0 (valid only where valid[i])
   std::vector<bool> valid;
   double median_parallax_deg = 0.0;
-  int num_inliers = 0;                 // valid triangulated points
-  int num_essential_inliers = 0;       // RANSAC inliers of the essential matrix
-  int num_rotation_only_inliers = 0;   // inliers of the rotation-only model
-  int num_homography_inliers = 0;      // essential inliers a homography explains
-  bool planar = false;                 // num_homography_inliers >= planar_min_ratio * essential inliers
-  bool used_homography = false;        // the motion came from the homography, not the essential matrix
-  int num_rival_inliers = 0;           // valid points of the best different motion (0: none)
+  int num_inliers = 0;                // valid triangulated points
+  int num_essential_inliers = 0;      // RANSAC inliers of the essential matrix
+  int num_rotation_only_inliers = 0;  // inliers of the rotation-only model
+  int num_homography_inliers = 0;     // essential inliers a homography explains
+  bool planar = false;                // num_homography_inliers >= planar_min_ratio * essential inliers
+  bool used_homography = false;       // the motion came from the homography, not the essential matrix
+  int num_rival_inliers = 0;          // valid points of the best different motion (0: none)
   // A different motion (translation > planar_distinct_deg away) triangulates nearly as many
   // points (ambiguous_rival_ratio): two views cannot tell which is right. The result is the
   // essential matrix's choice unless refuse_ambiguous.

@@ -11,27 +11,27 @@
 namespace vitamin_e::io {
 
 struct RunStats {
-  std::string dataset;           // path as given
-  std::string dataset_kind;      // "euroc", ...
-  std::string config;            // config file ("" = defaults)
-  std::string loaded_map;        // map file the run started in ("" = none; with one, no initialization:
-                                 // first_init_frame stays -1)
+  std::string dataset;             // path as given
+  std::string dataset_kind;        // "euroc", ...
+  std::string config;              // config file ("" = defaults)
+  std::string loaded_map;          // map file the run started in ("" = none; with one, no initialization:
+                                   // first_init_frame stays -1)
   bool localization_only = false;  // the loaded map was not changed
-  std::size_t frames = 0;        // frames given to the system
+  std::size_t frames = 0;          // frames given to the system
   std::size_t tracked_frames = 0;
-  std::size_t skipped_frames = 0;  // unreadable images (warned and skipped)
-  int init_retries = 0;          // re-initializations (new maps) after a loss
-  int relocalizations = 0;       // losses recovered in the existing map
-  long long first_init_frame = -1;      // frame at which the first map was built (-1: never)
-  std::size_t tracked_since_init = 0;    // tracked frames from that frame on
-  std::size_t reused_map_points = 0;     // map points taken over by new tracks (map reuse)
-  std::size_t map_points = 0;    // points written to points.ply
-  bool interrupted = false;      // stopped by SIGINT/SIGTERM
+  std::size_t skipped_frames = 0;      // unreadable images (warned and skipped)
+  int init_retries = 0;                // re-initializations (new maps) after a loss
+  int relocalizations = 0;             // losses recovered in the existing map
+  long long first_init_frame = -1;     // frame at which the first map was built (-1: never)
+  std::size_t tracked_since_init = 0;  // tracked frames from that frame on
+  std::size_t reused_map_points = 0;   // map points taken over by new tracks (map reuse)
+  std::size_t map_points = 0;          // points written to points.ply
+  bool interrupted = false;            // stopped by SIGINT/SIGTERM
   double wall_time_s = 0.0;
   double peak_rss_mb = 0.0;
   std::vector<double> points_per_frame;         // tracked points of each frame
   std::vector<double> mapped_points_per_frame;  // of which with a 3D position
-  StageTimings timing;           // per-stage ms, with a "total" stage
+  StageTimings timing;                          // per-stage ms, with a "total" stage
   // Per-frame counters by name (one value per frame that has it: pipeline::FrameDiagnostics),
   // summarized in stats.json as frame_diagnostics {name: {mean, median, min, max, sum}}.
   std::map<std::string, std::vector<double>> frame_counters;
@@ -64,8 +64,7 @@ bool writeRunStats(const RunStats& stats, const std::string& path, std::string* 
 double peakRssMb();
 
 // "[#####.....]  120/2912   4.1%  23.5 fps  ETA 1m59s  tracked 95%" (bar_width 0: no bar).
-std::string formatProgress(std::size_t done, std::size_t total, double elapsed_s, double tracked_ratio,
-                           int bar_width);
+std::string formatProgress(std::size_t done, std::size_t total, double elapsed_s, double tracked_ratio, int bar_width);
 // "1h02m03s", "4m05s", "7s".
 std::string formatDuration(double seconds);
 // JSON string literal with escapes.

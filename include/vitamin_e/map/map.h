@@ -20,7 +20,7 @@ namespace vitamin_e::map {
 
 // One keyframe's view of a landmark.
 struct LandmarkObservation {
-  std::uint64_t keyframe = 0;  // frame index of the keyframe
+  std::uint64_t keyframe = 0;                    // frame index of the keyframe
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();  // normalized undistorted
 };
 
@@ -28,11 +28,11 @@ struct Landmark {
   std::uint64_t id = 0;  // the track id
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   std::uint8_t intensity = 0;
-  std::int8_t polarity = 0;   // sign of the image curvature of its track (+1 / -1, 0 unknown)
-  bool revived = false;       // re-associated from the dormant landmarks (its position predates the window)
-  int num_observations = 0;   // keyframes that saw it (incl. retired ones)
+  std::int8_t polarity = 0;  // sign of the image curvature of its track (+1 / -1, 0 unknown)
+  bool revived = false;      // re-associated from the dormant landmarks (its position predates the window)
+  int num_observations = 0;  // keyframes that saw it (incl. retired ones)
   std::uint64_t last_seen_frame = 0;
-  int outlier_count = 0;      // times flagged by pose estimation / BA
+  int outlier_count = 0;                          // times flagged by pose estimation / BA
   std::vector<LandmarkObservation> observations;  // by the active keyframes, oldest first
 };
 
@@ -73,17 +73,17 @@ struct ArchivedPoint {
 // map file. Landmark observations are not part of it: they are the keyframes'
 // observations of the landmark's track, rebuilt on restore.
 struct MapSnapshot {
-  std::vector<Keyframe> keyframes;        // the active window, oldest first
-  std::vector<Landmark> landmarks;        // by id; `observations` left empty
-  std::vector<DormantLandmark> dormant;   // in retirement order
+  std::vector<Keyframe> keyframes;       // the active window, oldest first
+  std::vector<Landmark> landmarks;       // by id; `observations` left empty
+  std::vector<DormantLandmark> dormant;  // in retirement order
   std::uint64_t dormant_dropped = 0;
   std::vector<ArchivedPoint> archive;
   double archive_voxel = 0.0;
 };
 
 struct MapConfig {
-  int max_keyframes = 8;          // keyframes kept in the active window
-  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
+  int max_keyframes = 8;         // keyframes kept in the active window
+  double archive_voxel_m = 0.0;  // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
   // re-thins the archive to at most half the cap.
@@ -92,7 +92,7 @@ struct MapConfig {
   // Retired landmarks kept for re-association (~60 B each); the oldest go first.
   // 0 turns map reuse from dormant landmarks off.
   std::size_t max_dormant_landmarks = 100000;
-  void validate() const;          // throws std::invalid_argument
+  void validate() const;  // throws std::invalid_argument
 };
 
 class Map {

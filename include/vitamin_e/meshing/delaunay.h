@@ -18,7 +18,6 @@ std::vector<Eigen::Vector3i> delaunayTriangulate(const std::vector<Eigen::Vector
 // > 0 if a, b, c turn counter-clockwise (y up), < 0 clockwise, 0 collinear.
 double orient2d(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c);
 // > 0 if d is strictly inside the circumcircle of the counter-clockwise triangle a, b, c.
-double inCircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
-                const Eigen::Vector2d& d);
+double inCircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, const Eigen::Vector2d& d);
 
 }  // namespace vitamin_e::meshing

@@ -11,10 +11,10 @@
 namespace vitamin_e::meshing {
 
 struct MeshVertex {
-  std::uint64_t id = 0;          // track id (stable over frames)
+  std::uint64_t id = 0;                          // track id (stable over frames)
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // pinhole pixel
-  double inv_depth = 0.0;        // 1 / z in the camera frame (smoothed after denoise())
-  double measured_inv_depth = 0.0;  // as given to FrameMesher::build (the data term)
+  double inv_depth = 0.0;                        // 1 / z in the camera frame (smoothed after denoise())
+  double measured_inv_depth = 0.0;               // as given to FrameMesher::build (the data term)
 };
 
 struct FrameMesh {

@@ -20,7 +20,7 @@ struct FrameMesherConfig {
   // prune() also applies the jump test to the measured inverse depths (so that
   // smoothing cannot turn a real discontinuity into a kept "curtain").
   bool jump_on_measured = true;
-  void validate() const;               // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 class FrameMesher {

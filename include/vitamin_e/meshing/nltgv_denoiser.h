@@ -28,17 +28,17 @@
 namespace vitamin_e::meshing {
 
 struct NltgvConfig {
-  double alpha = 1.0;         // weight of the first-order (affine) term
-  double beta = 0.1;          // weight of the gradient smoothness term (normalized-coordinate units)
-  double lambda = 1.0;        // weight of the L1 data term
-  int iterations = 200;       // primal-dual iterations (cold start)
-  int warm_iterations = 120;  // iterations when most vertices were warm-started
-  double theta = 1.0;         // over-relaxation
-  double support_sigma = 0.05;  // relative inverse-depth jump scale of the support weights (0: all 1)
-  double min_support = 0.02;    // floor of the support weights
-  bool warm_start = true;        // keep the solution by track id for the next call
-  bool warm_start_primal = false; // also start from the previous inverse depths/gradients (else only the duals)
-  void validate() const;      // throws std::invalid_argument naming the key
+  double alpha = 1.0;              // weight of the first-order (affine) term
+  double beta = 0.1;               // weight of the gradient smoothness term (normalized-coordinate units)
+  double lambda = 1.0;             // weight of the L1 data term
+  int iterations = 200;            // primal-dual iterations (cold start)
+  int warm_iterations = 120;       // iterations when most vertices were warm-started
+  double theta = 1.0;              // over-relaxation
+  double support_sigma = 0.05;     // relative inverse-depth jump scale of the support weights (0: all 1)
+  double min_support = 0.02;       // floor of the support weights
+  bool warm_start = true;          // keep the solution by track id for the next call
+  bool warm_start_primal = false;  // also start from the previous inverse depths/gradients (else only the duals)
+  void validate() const;           // throws std::invalid_argument naming the key
 };
 
 struct NltgvStats {
@@ -58,7 +58,10 @@ class NltgvDenoiser {
   const NltgvConfig& config() const { return config_; }
 
  private:
-  struct VertexState { double ratio; double wx, wy; };
+  struct VertexState {
+    double ratio;
+    double wx, wy;
+  };
   NltgvConfig config_;
   std::unordered_map<std::uint64_t, VertexState> prev_vertices_;
   std::unordered_map<std::uint64_t, Eigen::Vector3d> prev_duals_;  // key: hash of (id_i, id_j)

@@ -26,9 +26,9 @@ struct SyntheticBaConfig {
 };
 
 struct SyntheticBa {
-  BaProblem truth;            // true cameras and points, noise-free observations
-  BaProblem noisy;            // true cameras and points, noisy observations (with outliers)
-  std::vector<bool> outlier;  // per observation
+  BaProblem truth;                             // true cameras and points, noise-free observations
+  BaProblem noisy;                             // true cameras and points, noisy observations (with outliers)
+  std::vector<bool> outlier;                   // per observation
   std::vector<int> first_camera, last_camera;  // per point: its track
 };
 

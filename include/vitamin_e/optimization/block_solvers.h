@@ -31,8 +31,8 @@ int solveBlockGaussSeidel(const BlockMatrix6& A, const std::vector<geometry::Vec
 
 // Conjugate gradients preconditioned by the inverse diagonal blocks (block Jacobi), from x = 0.
 // Stops after max_iterations or when |b - A x| <= tolerance * |b|. Returns the iterations.
-int solveBlockPcg(const BlockMatrix6& A, const std::vector<geometry::Vector6d>& b, int max_iterations,
-                  double tolerance, std::vector<geometry::Vector6d>* x);
+int solveBlockPcg(const BlockMatrix6& A, const std::vector<geometry::Vector6d>& b, int max_iterations, double tolerance,
+                  std::vector<geometry::Vector6d>* x);
 
 }  // namespace optimization
 }  // namespace vitamin_e

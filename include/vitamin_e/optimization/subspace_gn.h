@@ -61,9 +61,9 @@ struct BaOptions {
   CameraSolver camera_solver = CameraSolver::kConjugateGradient;
   int camera_iterations = 200;         // max passes (GS) / iterations (CG)
   double camera_gs_tolerance = 1e-10;  // (name kept for configs; used by both solvers)
-  int plain_gs_passes = 10;  // without use_schur: passes of the plain Eq. 11/12 Gauss-Seidel
-  double initial_lambda = 1e-4;  // LM damping (relative to the block diagonals)
-  int max_retries = 8;           // damped re-solves per sweep before giving up
+  int plain_gs_passes = 10;            // without use_schur: passes of the plain Eq. 11/12 Gauss-Seidel
+  double initial_lambda = 1e-4;        // LM damping (relative to the block diagonals)
+  int max_retries = 8;                 // damped re-solves per sweep before giving up
   // After each accepted sweep, this many relinearized Gauss-Newton steps on every point alone
   // (Eq. 12 with the cameras fixed; cheap, independent per point, threaded).
   int point_iterations = 1;
@@ -84,7 +84,7 @@ struct BaOptions {
   // solve is the same either way; this adds the reduced system's assembly and a dense 6 n_c
   // inverse (about 0.2 ms for 3,000 points and one free camera, see covariance_ms).
   bool compute_covariance = false;
-  void validate() const;         // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 struct BaSummary {
@@ -93,7 +93,7 @@ struct BaSummary {
   int sweeps = 0;             // linearizations performed
   int rejected_steps = 0;     // damped steps that did not decrease the cost (re-solved)
   double time_ms = 0.0;
-  bool converged = false;     // relative cost change fell below tolerance
+  bool converged = false;           // relative cost change fell below tolerance
   std::vector<double> residual_px;  // per observation, final |r| in pixels
   int free_cameras = 0;
   int free_points = 0;

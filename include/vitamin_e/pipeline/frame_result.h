@@ -20,11 +20,11 @@ const char* toString(TrackingState state);
 
 // One densely tracked point of the current frame.
 struct FramePoint {
-  std::uint64_t track_id = 0;   // stable over the frames the point is tracked
-  Eigen::Vector2f uv;           // pixel in the (distorted) input image
-  bool has_position = false;    // true once triangulated
+  std::uint64_t track_id = 0;                     // stable over the frames the point is tracked
+  Eigen::Vector2f uv;                             // pixel in the (distorted) input image
+  bool has_position = false;                      // true once triangulated
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();  // map position (world frame)
-  std::uint8_t intensity = 0;   // image intensity at uv
+  std::uint8_t intensity = 0;                     // image intensity at uv
 };
 
 // Per-frame counters of the map's life (issue 14): where tracks come from, why
@@ -34,39 +34,39 @@ struct FramePoint {
 struct FrameDiagnostics {
   // front end (this frame's tracking step)
   // The balance: tracks of the previous frame = (this frame's tracks - born) + lost + dropped.
-  int tracks_born = 0;                  // new tracks detected
-  int tracks_lost = 0;                  // tracks of the previous frame the tracker ended
-  int tracks_dropped = 0;               // tracks of the previous frame the back end ended (outliers)
-  std::map<std::string, int> lost_by;   // tracks_lost by the tracker's check (tracking::TrackerFrame::lost_by)
+  int tracks_born = 0;                 // new tracks detected
+  int tracks_lost = 0;                 // tracks of the previous frame the tracker ended
+  int tracks_dropped = 0;              // tracks of the previous frame the back end ended (outliers)
+  std::map<std::string, int> lost_by;  // tracks_lost by the tracker's check (tracking::TrackerFrame::lost_by)
   // the map points the previous frame's tracks carried (when it was tracked)
   std::size_t prev_map_points = 0;
-  std::size_t prev_map_tracked = 0;     // of them still tracked in this frame
-  std::size_t prev_map_left_view = 0;   // of the ended ones: project outside the image at this frame's pose
-  std::size_t prev_map_lost_in_view = 0;  // ... project inside it: the tracker lost them in view
+  std::size_t prev_map_tracked = 0;             // of them still tracked in this frame
+  std::size_t prev_map_left_view = 0;           // of the ended ones: project outside the image at this frame's pose
+  std::size_t prev_map_lost_in_view = 0;        // ... project inside it: the tracker lost them in view
   std::map<std::string, int> prev_map_lost_by;  // the ended ones by the tracker's check ("dropped": ended by
                                                 // the back end, not by the tracker)
   // pose
-  int pose_points = 0;                  // map points given to P3P + RANSAC
-  int pose_inliers = 0;                 // its inliers (0: not run)
-  int reused = 0;                       // map points taken over by new tracks (map reuse)
+  int pose_points = 0;   // map points given to P3P + RANSAC
+  int pose_inliers = 0;  // its inliers (0: not run)
+  int reused = 0;        // map points taken over by new tracks (map reuse)
   // mapping
-  bool keyframe = false;                // a keyframe was inserted (the first map's frame counts)
-  double keyframe_parallax_px = 0.0;    // rotation-compensated median parallax to the last keyframe [px]
-  std::size_t keyframes = 0;            // keyframes in the window after this frame
-  int triangulated = 0;                 // new map points made this frame
+  bool keyframe = false;              // a keyframe was inserted (the first map's frame counts)
+  double keyframe_parallax_px = 0.0;  // rotation-compensated median parallax to the last keyframe [px]
+  std::size_t keyframes = 0;          // keyframes in the window after this frame
+  int triangulated = 0;               // new map points made this frame
   std::map<std::string, int> triangulation_rejected_by;  // tried but refused: "parallax", "reprojection",
                                                          // "cheirality", "other"
   // The candidates: unmapped tracks seen by a keyframe older than this frame
   // (since the track was detected), waiting for the parallax that triangulates them.
   std::size_t candidates = 0;
   std::size_t candidates_two_keyframes = 0;  // of them seen by two or more keyframes (tried at each keyframe)
-  double candidate_parallax_deg = 0.0;  // median angle between a candidate's ray in the first keyframe after
-                                        // its detection and its ray in this frame (world frame): its parallax now
+  double candidate_parallax_deg = 0.0;       // median angle between a candidate's ray in the first keyframe after
+                                             // its detection and its ray in this frame (world frame): its parallax now
   // relocalization (a frame of kRelocalizing): "" not tried, "relocalized", "not_found" (no pose from
   // the index), "did_not_hold" (a pose found, not confirmed by the map points around it)
   std::string relocalization;
-  int relocalization_matches = 0;       // descriptor matches with the best keyframe
-  int relocalization_inliers = 0;       // P3P inliers among them
+  int relocalization_matches = 0;  // descriptor matches with the best keyframe
+  int relocalization_inliers = 0;  // P3P inliers among them
 
   // prev_map_tracked / prev_map_points (1 when there were none)
   double prevMapTrackedFraction() const {
@@ -75,25 +75,25 @@ struct FrameDiagnostics {
 };
 
 struct FrameResult {
-  std::uint64_t frame_index = 0;   // 0-based index of the frame in the stream
-  double timestamp = 0.0;          // seconds, as given to process()
+  std::uint64_t frame_index = 0;  // 0-based index of the frame in the stream
+  double timestamp = 0.0;         // seconds, as given to process()
   TrackingState state = TrackingState::kInitializing;
-  bool pose_valid = false;         // T_w_c is meaningful (state == kTracking)
+  bool pose_valid = false;                                  // T_w_c is meaningful (state == kTracking)
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // camera (optical) in world
   // Covariance of T_w_c from the per-frame BA (optimization::BaSummary::camera_covariance): of
   // the right perturbation delta = (rho, phi), T_w_c * expSE3(delta), in the camera frame, map
   // units^2 and rad^2, relative to the fixed keyframes. Meaningful only when the flag is set.
   Eigen::Matrix<double, 6, 6> T_w_c_covariance = Eigen::Matrix<double, 6, 6>::Zero();
   bool T_w_c_covariance_valid = false;
-  std::vector<FramePoint> points;  // tracked points of this frame
-  std::size_t num_tracked = 0;     // 2D tracks alive
-  std::size_t num_mapped = 0;      // tracks with a 3D position
-  std::size_t map_size = 0;        // points in the map
-  int init_retries = 0;            // re-initializations so far (each one a new map)
-  int relocalizations = 0;         // losses recovered in the existing map so far
+  std::vector<FramePoint> points;           // tracked points of this frame
+  std::size_t num_tracked = 0;              // 2D tracks alive
+  std::size_t num_mapped = 0;               // tracks with a 3D position
+  std::size_t map_size = 0;                 // points in the map
+  int init_retries = 0;                     // re-initializations so far (each one a new map)
+  int relocalizations = 0;                  // losses recovered in the existing map so far
   std::map<std::string, double> timing_ms;  // this frame's per-stage times
-  std::string message;             // a human-readable note (why lost, why waiting)
-  FrameDiagnostics diagnostics;    // the counters of the map's life this frame
+  std::string message;                      // a human-readable note (why lost, why waiting)
+  FrameDiagnostics diagnostics;             // the counters of the map's life this frame
 };
 
 }  // namespace vitamin_e::pipeline

@@ -19,7 +19,7 @@ struct PoseEstimate {
   bool ok = false;
   std::string why;  // when not ok
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
-  int num_points = 0;   // map points offered to the solver
+  int num_points = 0;  // map points offered to the solver
   int num_inliers = 0;
   // A minority of the tracked map points agreed, but the pose moved the way
   // the motion model predicted, so it was kept.

@@ -31,18 +31,18 @@ struct KeyframeDecision {
 
 struct KeyframeUpdate {
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // the new keyframe's pose after the window BA
-  int triangulated = 0;                 // new landmarks
-  std::map<std::string, int> rejected_by;  // tracks tried but not triangulated, by the failed check:
-                                           // "parallax", "reprojection", "cheirality", "other"
-  std::vector<std::uint64_t> removed;   // landmarks removed as outliers (their tracks must end)
+  int triangulated = 0;                                     // new landmarks
+  std::map<std::string, int> rejected_by;                   // tracks tried but not triangulated, by the failed check:
+                                                            // "parallax", "reprojection", "cheirality", "other"
+  std::vector<std::uint64_t> removed;                       // landmarks removed as outliers (their tracks must end)
 };
 
 // The unmapped tracks of a frame that a keyframe older than the frame saw
 // since the track was detected: the points waiting for triangulation.
 struct TriangulationBacklog {
   std::size_t candidates = 0;
-  std::size_t seen_twice = 0;       // of them also seen by the newest keyframe (two or more keyframes)
-  double median_parallax_deg = 0.0; // of the angle between the ray of the first keyframe seeing it and the frame's
+  std::size_t seen_twice = 0;        // of them also seen by the newest keyframe (two or more keyframes)
+  double median_parallax_deg = 0.0;  // of the angle between the ray of the first keyframe seeing it and the frame's
 };
 
 class Mapper {

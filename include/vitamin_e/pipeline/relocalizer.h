@@ -28,20 +28,20 @@
 namespace vitamin_e::pipeline {
 
 struct RelocalizerConfig {
-  bool enabled = true;            // false: a loss re-initializes at once (a new map)
-  int max_frames = 30;            // frames with features, lost and not relocalized, before re-initializing (>= 1)
-  int max_keyframes = 400;        // keyframes indexed; the oldest are dropped (>= 1)
-  int points_per_keyframe = 1500; // described map points kept per keyframe, spread over the image (>= 10)
-  int query_points = 2500;        // tracks of a lost frame described, spread over the image (>= 10)
-  int candidates = 4;             // best-voted keyframes (and orientations) tried per lost frame, besides the newest (>= 1)
-  int patch_size = 31;            // BRIEF window at full resolution [px], odd >= 7
-  double smoothing_sigma = 2.0;   // Gaussian smoothing before the BRIEF tests [px] (> 0)
-  int max_distance = 64;          // accepted Hamming distance (of 256)
-  double ratio = 0.85;            // best / second best distance, (0, 1]
-  int min_inliers = 30;           // P3P inliers to accept a pose (>= 6)
-  double min_inlier_ratio = 0.25; // of the descriptor matches, (0, 1]
-  bool upside_down = true;        // also look for the frame turned by 180 degrees (a rolled camera)
-  void validate() const;          // throws std::invalid_argument naming the key
+  bool enabled = true;             // false: a loss re-initializes at once (a new map)
+  int max_frames = 30;             // frames with features, lost and not relocalized, before re-initializing (>= 1)
+  int max_keyframes = 400;         // keyframes indexed; the oldest are dropped (>= 1)
+  int points_per_keyframe = 1500;  // described map points kept per keyframe, spread over the image (>= 10)
+  int query_points = 2500;         // tracks of a lost frame described, spread over the image (>= 10)
+  int candidates = 4;   // best-voted keyframes (and orientations) tried per lost frame, besides the newest (>= 1)
+  int patch_size = 31;  // BRIEF window at full resolution [px], odd >= 7
+  double smoothing_sigma = 2.0;    // Gaussian smoothing before the BRIEF tests [px] (> 0)
+  int max_distance = 64;           // accepted Hamming distance (of 256)
+  double ratio = 0.85;             // best / second best distance, (0, 1]
+  int min_inliers = 30;            // P3P inliers to accept a pose (>= 6)
+  double min_inlier_ratio = 0.25;  // of the descriptor matches, (0, 1]
+  bool upside_down = true;         // also look for the frame turned by 180 degrees (a rolled camera)
+  void validate() const;           // throws std::invalid_argument naming the key
 };
 
 struct Relocalization {

@@ -110,8 +110,7 @@ class System {
 // The frame's triangulated points in its camera frame (p_c = T_w_c^-1 p_w) with
 // their track ids: the input of the dense reconstruction. Empty unless the
 // frame has a valid pose.
-void framePointsInCamera(const FrameResult& result, std::vector<std::uint64_t>* ids,
-                         std::vector<Eigen::Vector3d>* p_c);
+void framePointsInCamera(const FrameResult& result, std::vector<std::uint64_t>* ids, std::vector<Eigen::Vector3d>* p_c);
 
 // Writers shared by the offline runner and the ROS services. Return false (and
 // fill *error) when the file cannot be written.

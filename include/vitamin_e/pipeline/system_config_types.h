@@ -19,34 +19,34 @@ namespace vitamin_e::pipeline {
 fusion::DenseMapperConfig defaultDenseConfig();
 
 struct SystemConfig {
-  tracking::TrackerConfig tracker;            // yaml section "tracker"
-  geometry::TwoViewConfig init;               // yaml section "init"
-  geometry::PnpConfig pnp;                    // yaml section "pnp"
+  tracking::TrackerConfig tracker;              // yaml section "tracker"
+  geometry::TwoViewConfig init;                 // yaml section "init"
+  geometry::PnpConfig pnp;                      // yaml section "pnp"
   geometry::TriangulationConfig triangulation;  // yaml section "triangulation"
-  optimization::BaOptions ba;                 // yaml section "ba"
-  map::MapConfig map;                         // yaml section "map"
-  RelocalizerConfig relocalization;           // yaml section "relocalization"
+  optimization::BaOptions ba;                   // yaml section "ba"
+  map::MapConfig map;                           // yaml section "map"
+  RelocalizerConfig relocalization;             // yaml section "relocalization"
   // Dense reconstruction (yaml section "dense"): run by the offline runner and
   // the ROS meshing nodelet on the system's per-frame points, not by System.
   bool dense_enabled = true;
   fusion::DenseMapperConfig dense = defaultDenseConfig();
 
   // --- pipeline (yaml section "pipeline") ---
-  int min_init_tracks = 200;            // tracks shared with the reference frame needed to try initializing
-  double init_min_disparity_px = 20.0;  // median track displacement before the two-view fit is tried
-  int init_max_pending_frames = 60;     // frames kept since the reference; beyond it the reference moves on
-  int min_pose_inliers = 30;            // fewer P3P inliers than this: the frame is lost
-  double min_pose_inlier_ratio = 0.5;   // ... or fewer than this share of the tracked map points
-  double weak_pose_max_step_ratio = 2.0;  // ... unless its step is within this factor of the predicted one
-  int max_outlier_count = 2;            // times a point may be an outlier before it is removed
-  double max_reprojection_px = 3.0;     // observation residual after BA above which a point is flagged
-  int ba_fixed_keyframes = 2;           // oldest keyframes held fixed in the keyframe BA (gauge and scale)
-  int ba_keyframe_sweeps = 5;           // subspace GN sweeps when a keyframe is inserted
-  int ba_frame_sweeps = 3;              // subspace GN sweeps of the per-frame BA
-  int ba_free_keyframes = 3;            // newest keyframes optimized by the keyframe BA (with their points)
-  double keyframe_parallax_px = 20.0;   // rotation-compensated median parallax to the last keyframe
+  int min_init_tracks = 200;               // tracks shared with the reference frame needed to try initializing
+  double init_min_disparity_px = 20.0;     // median track displacement before the two-view fit is tried
+  int init_max_pending_frames = 60;        // frames kept since the reference; beyond it the reference moves on
+  int min_pose_inliers = 30;               // fewer P3P inliers than this: the frame is lost
+  double min_pose_inlier_ratio = 0.5;      // ... or fewer than this share of the tracked map points
+  double weak_pose_max_step_ratio = 2.0;   // ... unless its step is within this factor of the predicted one
+  int max_outlier_count = 2;               // times a point may be an outlier before it is removed
+  double max_reprojection_px = 3.0;        // observation residual after BA above which a point is flagged
+  int ba_fixed_keyframes = 2;              // oldest keyframes held fixed in the keyframe BA (gauge and scale)
+  int ba_keyframe_sweeps = 5;              // subspace GN sweeps when a keyframe is inserted
+  int ba_frame_sweeps = 3;                 // subspace GN sweeps of the per-frame BA
+  int ba_free_keyframes = 3;               // newest keyframes optimized by the keyframe BA (with their points)
+  double keyframe_parallax_px = 20.0;      // rotation-compensated median parallax to the last keyframe
   double keyframe_min_mapped_ratio = 0.5;  // fewer mapped tracks than this ratio also asks for a keyframe
-  double max_step_depth_ratio = 1.0;    // a per-frame step longer than this x scene depth is a failure
+  double max_step_depth_ratio = 1.0;       // a per-frame step longer than this x scene depth is a failure
   // Map reuse: a new, unmapped track within reuse_radius_px of the projection of a
   // map point whose own track ended (still in the window, or dormant: see
   // map.max_dormant_landmarks) takes that point over, when the curvature signs
@@ -57,8 +57,8 @@ struct SystemConfig {
   bool reuse_fix_revived = true;        // revived dormant points stay fixed in BA (they anchor the older map)
   int reuse_dormant_per_frame = 25000;  // dormant points checked per frame, round robin (bounds the cost)
 
-  void validate() const;        // throws ConfigError naming the key
-  std::string describe() const; // readable listing of every value
+  void validate() const;         // throws ConfigError naming the key
+  std::string describe() const;  // readable listing of every value
 };
 
 }  // namespace vitamin_e::pipeline

@@ -2,9 +2,9 @@
 // The hand-over between the two stages of the SLAM system: what the tracking
 // stage (dense tracker + undistortion) produces for the mapping stage.
 #include <Eigen/Core>
-#include <opencv2/core.hpp>
 #include <cstdint>
 #include <map>
+#include <opencv2/core.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,11 +14,11 @@ namespace vitamin_e::pipeline {
 // A 2D track in the current frame, undistorted.
 struct FrameTrack {
   std::uint64_t id;
-  Eigen::Vector2f uv;      // distorted pixel
-  Eigen::Vector2d xy;      // normalized undistorted
+  Eigen::Vector2f uv;  // distorted pixel
+  Eigen::Vector2d xy;  // normalized undistorted
   std::uint8_t intensity;
-  std::int8_t polarity;    // sign of the image curvature at the extremum (+1 / -1)
-  int age = 0;             // frames tracked before this one (0: detected in this frame)
+  std::int8_t polarity;  // sign of the image curvature at the extremum (+1 / -1)
+  int age = 0;           // frames tracked before this one (0: detected in this frame)
 };
 
 // The output of the tracking stage, the input of the mapping stage.
@@ -36,7 +36,7 @@ struct TrackedFrame {
   int tracks_dropped = 0;  // tracks of the previous frame ended by the back end before this one was tracked
   std::map<std::string, int> lost_by;
   std::vector<std::pair<std::uint64_t, const char*>> ended;  // id, reason (static string)
-  bool skipped = false;  // stamp did not increase: nothing tracked
+  bool skipped = false;                                      // stamp did not increase: nothing tracked
   std::string message;
 };
 

@@ -49,9 +49,9 @@ class GravityWindow {
     bool ok = false;
     Eigen::Vector3d up_w = Eigen::Vector3d::Zero();  // unit
     int samples = 0;
-    double span_s = 0.0;       // time covered by the samples used
-    double magnitude = 0.0;    // |mean specific force| (9.81 at rest or in steady flight)
-    std::string message;       // why not ok
+    double span_s = 0.0;     // time covered by the samples used
+    double magnitude = 0.0;  // |mean specific force| (9.81 at rest or in steady flight)
+    std::string message;     // why not ok
   };
   // Mean of R_w_c(t) R_c_imu f over the samples in [t_end - window_s, t_end].
   Estimate upInWorld(double t_end, double window_s, const std::function<Eigen::Matrix3d(double)>& R_w_c_at,

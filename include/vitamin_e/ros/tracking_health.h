@@ -8,16 +8,16 @@ namespace vitamin_e_ros {
 
 struct HealthInput {
   bool calibrated = false;
-  std::size_t received = 0;         // images received so far
-  double since_input_s = 1e9;       // wall time since the last image
-  double since_processed_s = 1e9;   // wall time since the last processed frame
-  int state = -1;                   // vitamin_e::TrackingStatus state, -1: none yet
-  std::string message;              // the last frame's message
-  double input_hz = 0.0;            // images received per second (wall clock)
-  double processed_hz = 0.0;        // frames processed per second
-  bool queue_all = false;           // ~process_all_frames: frames wait in the queue, none is dropped
-  std::size_t queued = 0;           // frames waiting in the SLAM thread's queue now
-  std::size_t queue_capacity = 1;   // its size (full in bag mode: the image callback waits)
+  std::size_t received = 0;        // images received so far
+  double since_input_s = 1e9;      // wall time since the last image
+  double since_processed_s = 1e9;  // wall time since the last processed frame
+  int state = -1;                  // vitamin_e::TrackingStatus state, -1: none yet
+  std::string message;             // the last frame's message
+  double input_hz = 0.0;           // images received per second (wall clock)
+  double processed_hz = 0.0;       // frames processed per second
+  bool queue_all = false;          // ~process_all_frames: frames wait in the queue, none is dropped
+  std::size_t queued = 0;          // frames waiting in the SLAM thread's queue now
+  std::size_t queue_capacity = 1;  // its size (full in bag mode: the image callback waits)
 };
 
 struct Health {

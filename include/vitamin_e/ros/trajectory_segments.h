@@ -16,13 +16,13 @@
 namespace vitamin_e_ros {
 
 struct TrajectorySegment {
-  std::string note;  // why it started (one line)
+  std::string note;                                         // why it started (one line)
   std::vector<vitamin_e::pipeline::TrajectoryEntry> poses;  // T_map_c, time order
 };
 
 // Returns false (and sets *error) when the file cannot be written. Non-finite poses are skipped.
-bool saveSegmentsTum(const std::vector<TrajectorySegment>& segments, const std::string& header,
-                     const std::string& path, std::string* error);
+bool saveSegmentsTum(const std::vector<TrajectorySegment>& segments, const std::string& header, const std::string& path,
+                     std::string* error);
 // Reads such a file back (a file without segment lines is one segment). Throws std::runtime_error.
 std::vector<TrajectorySegment> readSegmentsTum(const std::string& path);
 

@@ -11,17 +11,17 @@ namespace vitamin_e::synth {
 
 struct CameraPathConfig {
   Eigen::Vector3d center{0.0, 0.0, 1.4};
-  double radius_x = 1.2;        // half width of the figure-eight along x [m]
-  double radius_y = 0.7;        // half height along y [m]
-  double height_amp = 0.15;     // z oscillation [m]
-  double speed = 0.4;           // mean speed along the path [m/s]
-  double heading0 = 0.0;        // initial viewing direction (yaw about z) [rad]
-  double heading_rate = 0.12;   // slow turn of the viewing direction [rad/s]
-  double yaw_amp = 0.2;         // yaw oscillation [rad]
-  double pitch0 = -0.12;        // looking slightly down [rad]
-  double pitch_amp = 0.08;      // [rad]
-  double roll_amp = 0.05;       // [rad]
-  void validate() const;        // throws std::invalid_argument naming the key
+  double radius_x = 1.2;       // half width of the figure-eight along x [m]
+  double radius_y = 0.7;       // half height along y [m]
+  double height_amp = 0.15;    // z oscillation [m]
+  double speed = 0.4;          // mean speed along the path [m/s]
+  double heading0 = 0.0;       // initial viewing direction (yaw about z) [rad]
+  double heading_rate = 0.12;  // slow turn of the viewing direction [rad/s]
+  double yaw_amp = 0.2;        // yaw oscillation [rad]
+  double pitch0 = -0.12;       // looking slightly down [rad]
+  double pitch_amp = 0.08;     // [rad]
+  double roll_amp = 0.05;      // [rad]
+  void validate() const;       // throws std::invalid_argument naming the key
 };
 
 class CameraPath {

@@ -19,10 +19,10 @@ namespace vitamin_e::synth {
 struct DriveLeg {
   enum class Kind { kStraight, kTurn };
   Kind kind = Kind::kStraight;
-  double length_m = 10.0;     // arc length of the leg
-  double end_speed = 2.0;     // speed at the end of the leg [m/s]
-  double turn_rad = 0.0;      // turns: heading change, + = left (counter-clockwise seen from above)
-  double ramp_fraction = 0.3; // turns: curvature ramp-up (and ramp-down) length / leg length, in (0, 0.5]
+  double length_m = 10.0;      // arc length of the leg
+  double end_speed = 2.0;      // speed at the end of the leg [m/s]
+  double turn_rad = 0.0;       // turns: heading change, + = left (counter-clockwise seen from above)
+  double ramp_fraction = 0.3;  // turns: curvature ramp-up (and ramp-down) length / leg length, in (0, 0.5]
 };
 
 struct DrivePathConfig {
@@ -31,12 +31,12 @@ struct DrivePathConfig {
   double heading0 = 0.0;            // driving direction at t = 0 (yaw about z, 0 = +x) [rad]
   double start_speed = 2.0;         // [m/s]
   std::vector<DriveLeg> legs;
-  double camera_height = 1.65;      // above the road (z = 0) [m]
-  double pitch0 = 0.0;              // camera pitch, + = up [rad]
-  double pitch_amp = 0.004;         // wobble amplitudes [rad], [rad], [m]
+  double camera_height = 1.65;  // above the road (z = 0) [m]
+  double pitch0 = 0.0;          // camera pitch, + = up [rad]
+  double pitch_amp = 0.004;     // wobble amplitudes [rad], [rad], [m]
   double roll_amp = 0.003;
   double height_amp = 0.01;
-  void validate() const;            // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 class DrivePath {
@@ -45,15 +45,15 @@ class DrivePath {
 
   // Camera (optical) in the world (z up) at time t [s]; t is clamped to [0, duration()].
   Eigen::Isometry3d T_w_c(double t) const;
-  Eigen::Vector3d position(double t) const;         // camera position
-  Eigen::Vector2d groundPosition(double t) const;   // the car's (x, y), no wobble
-  double heading(double t) const;                   // driving direction [rad], unwrapped
-  double speed(double t) const;                     // [m/s]
-  double yawRate(double t) const;                   // heading rate [rad/s] (curvature x speed)
-  double arcLength(double t) const;                 // distance driven since t = 0 [m]
-  double timeAtArcLength(double s) const;           // inverse of arcLength [s]
-  double duration() const { return duration_; }     // time to the end of the last leg [s]
-  double length() const { return length_; }         // total arc length [m]
+  Eigen::Vector3d position(double t) const;        // camera position
+  Eigen::Vector2d groundPosition(double t) const;  // the car's (x, y), no wobble
+  double heading(double t) const;                  // driving direction [rad], unwrapped
+  double speed(double t) const;                    // [m/s]
+  double yawRate(double t) const;                  // heading rate [rad/s] (curvature x speed)
+  double arcLength(double t) const;                // distance driven since t = 0 [m]
+  double timeAtArcLength(double s) const;          // inverse of arcLength [s]
+  double duration() const { return duration_; }    // time to the end of the last leg [s]
+  double length() const { return length_; }        // total arc length [m]
   // Start and end arc length of leg i.
   double legStart(int i) const { return leg_s0_[i]; }
   double legEnd(int i) const { return leg_s0_[i] + config_.legs[i].length_m; }

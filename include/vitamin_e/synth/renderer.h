@@ -17,7 +17,7 @@
 namespace vitamin_e::synth {
 
 struct RenderOptions {
-  double noise_sigma = 0.0;    // Gaussian noise [grey levels of 255]
+  double noise_sigma = 0.0;  // Gaussian noise [grey levels of 255]
   std::uint64_t noise_seed = 0;
 };
 
@@ -40,9 +40,9 @@ class Renderer {
   const Scene& scene_;
   camera::Camera camera_;
   int ss_ = 1;
-  std::vector<Eigen::Vector3f> rays_c_;   // per subsample, row-major pixels then s*s samples; unit bearings
-  std::vector<float> pixel_angle_;        // per pixel: angular size [rad] (of one subsample)
-  static constexpr int kTile = 16;        // pixels are rendered in kTile x kTile tiles
+  std::vector<Eigen::Vector3f> rays_c_;  // per subsample, row-major pixels then s*s samples; unit bearings
+  std::vector<float> pixel_angle_;       // per pixel: angular size [rad] (of one subsample)
+  static constexpr int kTile = 16;       // pixels are rendered in kTile x kTile tiles
   int tiles_x_ = 0;
   // Per tile (row-major): inward normals (camera frame) of a pyramid holding all its rays.
   std::vector<std::array<Eigen::Vector3d, 4>> tile_normals_c_;

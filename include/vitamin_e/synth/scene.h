@@ -18,11 +18,11 @@ namespace vitamin_e::synth {
 struct SceneConfig {
   Eigen::Vector3d room_min{-4.0, -3.0, 0.0};
   Eigen::Vector3d room_max{4.0, 3.0, 3.0};
-  int num_boxes = 6;           // placed at random, clear of keep_clear points
+  int num_boxes = 6;  // placed at random, clear of keep_clear points
   double box_clearance_m = 1.0;
-  double texel_m = 0.005;      // texture resolution on every face
+  double texel_m = 0.005;  // texture resolution on every face
   std::uint64_t seed = 0;
-  void validate() const;       // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 struct AxisBox {
@@ -38,8 +38,8 @@ struct Face {
   double plane = 0.0;
   int normal_sign = 1;
   Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();
-  int owner = -1;          // -1: room, k: boxes()[k]
-  float brightness = 1.0f; // multiplies the texture (fake shading)
+  int owner = -1;           // -1: room, k: boxes()[k]
+  float brightness = 1.0f;  // multiplies the texture (fake shading)
   Texture texture;
   Eigen::Vector3d normal() const;
 };
@@ -59,7 +59,7 @@ struct SceneBox {
 };
 
 struct RayHit {
-  double t = 0.0;       // distance along the (unit) direction
+  double t = 0.0;  // distance along the (unit) direction
   int face = -1;
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   double cos_incidence = 1.0;  // |d . n|

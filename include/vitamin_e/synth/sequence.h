@@ -28,14 +28,14 @@ struct SequenceConfig {
   int width = 752;
   int height = 480;
   std::uint64_t seed = 0;
-  double speed = 0.4;          // mean camera speed [m/s]
-  double noise_sigma = 1.0;    // Gaussian image noise [grey levels]
-  bool distortion = true;      // EuRoC cam0 radial-tangential; false: pinhole
-  int supersample = 1;         // s x s rays per pixel (mip filtering is always on)
+  double speed = 0.4;        // mean camera speed [m/s]
+  double noise_sigma = 1.0;  // Gaussian image noise [grey levels]
+  bool distortion = true;    // EuRoC cam0 radial-tangential; false: pinhole
+  int supersample = 1;       // s x s rays per pixel (mip filtering is always on)
   double texel_m = 0.005;
-  int num_boxes = 6;           // room only
+  int num_boxes = 6;  // room only
   std::int64_t start_ns = 1600000000000000000LL;
-  void validate() const;       // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 // The defaults of a scene: "room" as SequenceConfig{}; "street": the KITTI
@@ -67,8 +67,8 @@ std::int64_t frameTimestampNs(const SequenceConfig& config, int i);
 struct SequenceStats {
   int frames = 0;
   double scene_build_s = 0.0;
-  double render_ms_mean = 0.0;   // rendering only, per frame
-  double write_ms_mean = 0.0;    // PNG encoding + writing, per frame
+  double render_ms_mean = 0.0;  // rendering only, per frame
+  double write_ms_mean = 0.0;   // PNG encoding + writing, per frame
 };
 
 // Renders and writes the sequence into out_dir (created; existing files are

@@ -21,26 +21,26 @@
 namespace vitamin_e::synth {
 
 struct StreetConfig {
-  double road_width_m = 10.0;      // kerb to kerb
+  double road_width_m = 10.0;  // kerb to kerb
   double sidewalk_width_m = 3.0;
   double kerb_height_m = 0.15;
-  double lane_offset_m = 1.5;      // the path runs this far right of a street's centre line
-  double block_min_m = 35.0;       // spacing of side streets [min, max]
+  double lane_offset_m = 1.5;  // the path runs this far right of a street's centre line
+  double block_min_m = 35.0;   // spacing of side streets [min, max]
   double block_max_m = 80.0;
   double building_width_min_m = 8.0;
   double building_width_max_m = 24.0;
   double building_height_min_m = 7.0;
   double building_height_max_m = 20.0;
   double parking_probability = 0.6;  // chance that a parking slot holds a car
-  double margin_m = 70.0;          // town extent beyond the path's bounding box
-  double ring_depth_m = 15.0;      // depth of the closing ring of buildings at the border
-  double car_clearance_m = 1.3;    // parked cars stay this far (horizontally) from the camera path
-  double texel_m = 0.02;           // finest texel, on the faces nearest to the path
-  double texel_per_m = 0.0012;     // texel growth with a face's distance from the path
+  double margin_m = 70.0;            // town extent beyond the path's bounding box
+  double ring_depth_m = 15.0;        // depth of the closing ring of buildings at the border
+  double car_clearance_m = 1.3;      // parked cars stay this far (horizontally) from the camera path
+  double texel_m = 0.02;             // finest texel, on the faces nearest to the path
+  double texel_per_m = 0.0012;       // texel growth with a face's distance from the path
   double max_texel_m = 0.2;
   double sky_intensity = 0.86;
   std::uint64_t seed = 0;
-  void validate() const;           // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 // One street: its centre line runs along `axis` (0: x, 1: y) at the other

@@ -30,7 +30,6 @@ AffineFit fitAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std
 // The same IRLS started from a given (A, b) (no mode search), annealing sigma
 // from sigma_start to sigma_final; used to refine a flow with many pairs.
 AffineFit refineAffineGemanMcClure(const std::vector<Eigen::Vector2d>& x, const std::vector<Eigen::Vector2d>& y,
-                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0,
-                                   const AffineFitConfig& config);
+                                   const Eigen::Matrix2d& A0, const Eigen::Vector2d& b0, const AffineFitConfig& config);
 
 }  // namespace vitamin_e::tracking

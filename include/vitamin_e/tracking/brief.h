@@ -44,9 +44,9 @@ class BriefExtractor {
 };
 
 struct MatchConfig {
-  int max_distance = 70;   // accept only Hamming distance <= this
-  double ratio = 0.9;      // best < ratio * second best (1 = off)
-  bool cross_check = true; // best in both directions
+  int max_distance = 70;    // accept only Hamming distance <= this
+  double ratio = 0.9;       // best < ratio * second best (1 = off)
+  bool cross_check = true;  // best in both directions
 };
 
 // Matches a (query) to b (train); returns (index in a, index in b) pairs.

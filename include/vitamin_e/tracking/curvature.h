@@ -14,8 +14,7 @@ namespace vitamin_e::tracking {
 // central differences of the smoothed image (= separable [-1 0 1]/2 and
 // [1 -2 1] filters). Output CV_32FC1 of the same size, 0 on the 1-px border.
 // `stripes` > 1 splits the rows over cv::parallel_for_.
-void computeCurvature(const cv::Mat& gray, double sigma, cv::Mat* kappa, int stripes = 1,
-                      cv::Mat* smoothed = nullptr);
+void computeCurvature(const cv::Mat& gray, double sigma, cv::Mat* kappa, int stripes = 1, cv::Mat* smoothed = nullptr);
 
 // Robust curvature scale: median |kappa| over a sparse grid (every `step` px),
 // ignoring exact zeros; 0 for a flat image.
@@ -29,15 +28,15 @@ struct Extremum {
 // Strict local maxima of kappa (kappa > 0) and of -kappa (kappa < 0) over the
 // (2r+1)^2 window, with |kappa| >= threshold, at least `border` px from the edge.
 // Output in row-major order.
-void detectExtrema(const cv::Mat& kappa, int nms_radius, float threshold, int border,
-                   std::vector<Extremum>* out, int stripes = 1);
+void detectExtrema(const cv::Mat& kappa, int nms_radius, float threshold, int border, std::vector<Extremum>* out,
+                   int stripes = 1);
 
 struct ClimbParams {
-  float sign = 1.f;       // +1 climbs kappa, -1 climbs -kappa
-  float lambda = 0.f;     // prior weight, in the raw units of kappa
-  float sigma2 = 9.f;     // Geman-McClure sigma^2 of w [px^2]
+  float sign = 1.f;    // +1 climbs kappa, -1 climbs -kappa
+  float lambda = 0.f;  // prior weight, in the raw units of kappa
+  float sigma2 = 9.f;  // Geman-McClure sigma^2 of w [px^2]
   int max_steps = 10;
-  int border = 2;         // the climb stays at least this far from the image edge
+  int border = 2;  // the climb stays at least this far from the image edge
 };
 
 // Hill climbing over 8 neighbours from round(prediction) on

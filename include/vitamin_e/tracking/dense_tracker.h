@@ -33,91 +33,95 @@ namespace vitamin_e::tracking {
 
 struct TrackerConfig {
   // --- detection ---
-  int max_points = 8000;            // upper bound on live points per frame (> 0)
-  int grid_cell_px = 8;             // bucketing cell size [px]; new points go to under-filled cells
-  int max_per_cell = 2;             // live points allowed per cell (>= 1)
-  int nms_radius_px = 1;            // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
-  int border_px = 8;                // no point closer than this to the image border (>= 2)
-  double smoothing_sigma = 2.0;     // Gaussian pre-smoothing before derivatives [px] (0 = none)
-  bool adaptive_smoothing = true;   // raise the smoothing on noisy images (noise / median gradient above noise_reference)
-  double max_smoothing_sigma = 3.0; // upper bound of the adaptive smoothing [px] (>= smoothing_sigma)
-  double noise_reference = 0.5;     // noise sigma / median |raw gradient| above which smoothing grows as sqrt(ratio/ref) (> 0)
+  int max_points = 8000;         // upper bound on live points per frame (> 0)
+  int grid_cell_px = 8;          // bucketing cell size [px]; new points go to under-filled cells
+  int max_per_cell = 2;          // live points allowed per cell (>= 1)
+  int nms_radius_px = 1;         // an extremum must dominate its (2r+1)^2 window, same sign (>= 1)
+  int border_px = 8;             // no point closer than this to the image border (>= 2)
+  double smoothing_sigma = 2.0;  // Gaussian pre-smoothing before derivatives [px] (0 = none)
+  bool adaptive_smoothing =
+      true;  // raise the smoothing on noisy images (noise / median gradient above noise_reference)
+  double max_smoothing_sigma = 3.0;  // upper bound of the adaptive smoothing [px] (>= smoothing_sigma)
+  double noise_reference =
+      0.5;  // noise sigma / median |raw gradient| above which smoothing grows as sqrt(ratio/ref) (> 0)
   double kappa_smoothing_sigma = 0.0;  // Gaussian smoothing of kappa itself before extrema/tracking [px] (0 = none)
-  double min_curvature = 1.0;       // detection threshold on |kappa| / median|kappa| (>= 0)
-  double min_abs_curvature = 0.5;   // absolute floor on |kappa| [DN^3/px^4]; flat/black images give nothing
+  double min_curvature = 1.0;          // detection threshold on |kappa| / median|kappa| (>= 0)
+  double min_abs_curvature = 0.5;      // absolute floor on |kappa| [DN^3/px^4]; flat/black images give nothing
   // --- dominant flow (BRIEF on a shrunk image + Geman-McClure affine fit) ---
-  double brief_scale = 1.0 / 6.0;   // shrink factor of the matching image, (0, 1]
-  int brief_max_keypoints = 400;    // strongest curvature extrema of the small image described
-  int brief_patch_size = 15;        // side of the BRIEF test window in the small image [px], odd >= 7
-  int brief_max_distance = 70;      // max Hamming distance of an accepted match (of 256)
-  double brief_ratio = 0.9;         // best/second-best distance ratio test, (0, 1]; matches are also cross-checked
-  double flow_sigma_px = 3.0;       // final Geman-McClure sigma of the affine fit [full-res px] (> 0)
-  double flow_sigma_start_px = 30.0;// annealing starts here and halves down to flow_sigma_px (>= flow_sigma_px)
-  int flow_iterations = 5;          // IRLS iterations per annealing level (>= 1)
-  int flow_min_matches = 8;         // fewer inliers than this: flow_ok = false, identity + previous b used
+  double brief_scale = 1.0 / 6.0;     // shrink factor of the matching image, (0, 1]
+  int brief_max_keypoints = 400;      // strongest curvature extrema of the small image described
+  int brief_patch_size = 15;          // side of the BRIEF test window in the small image [px], odd >= 7
+  int brief_max_distance = 70;        // max Hamming distance of an accepted match (of 256)
+  double brief_ratio = 0.9;           // best/second-best distance ratio test, (0, 1]; matches are also cross-checked
+  double flow_sigma_px = 3.0;         // final Geman-McClure sigma of the affine fit [full-res px] (> 0)
+  double flow_sigma_start_px = 30.0;  // annealing starts here and halves down to flow_sigma_px (>= flow_sigma_px)
+  int flow_iterations = 5;            // IRLS iterations per annealing level (>= 1)
+  int flow_min_matches = 8;           // fewer inliers than this: flow_ok = false, identity + previous b used
   // --- extrema tracking ---
-  double lambda = 8.0;              // weight of the prediction prior in F, in normalized-curvature units (>= 0)
-  double track_sigma_px = 1.5;      // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
-  int max_climb_steps = 12;         // hill-climbing steps (8-neighbour moves) before giving up (>= 1)
-  double prediction_blend = 0.3;    // [0, 1): move the sub-pixel extremum this far toward x_bar when within 1 px (temporal filter; 0 = pure extremum);
-                                    // replaced by the patch filter (extremum_weight < 1) where the patch alignment succeeds
-  int polish_steps = 0;             // after maximizing F, climb kappa alone (no prior) up to this many steps; 0 = off (the prior helps on noisy images)
-  double fb_threshold_px = 1.0;     // forward-backward check: max distance back to the old position [px] (> 0)
-  double min_track_curvature = 0.5; // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
-  double max_curvature_ratio = 1.5; // ... or when its normalized |kappa| changes by more than this factor (>= 1)
+  double lambda = 8.0;          // weight of the prediction prior in F, in normalized-curvature units (>= 0)
+  double track_sigma_px = 1.5;  // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
+  int max_climb_steps = 12;     // hill-climbing steps (8-neighbour moves) before giving up (>= 1)
+  double prediction_blend =
+      0.3;  // [0, 1): move the sub-pixel extremum this far toward x_bar when within 1 px (temporal filter; 0 = pure extremum);
+      // replaced by the patch filter (extremum_weight < 1) where the patch alignment succeeds
+  int polish_steps =
+      0;  // after maximizing F, climb kappa alone (no prior) up to this many steps; 0 = off (the prior helps on noisy images)
+  double fb_threshold_px = 1.0;          // forward-backward check: max distance back to the old position [px] (> 0)
+  double min_track_curvature = 0.5;      // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
+  double max_curvature_ratio = 1.5;      // ... or when its normalized |kappa| changes by more than this factor (>= 1)
   bool relative_strength_change = true;  // ... relative to the frame's median change over all climbed tracks
-                                    // (an exposure step scales every peak by about the brightness ratio cubed,
-                                    // which the noise-dominated median |kappa| does not follow); false: relative to 1
+                                         // (an exposure step scales every peak by about the brightness ratio cubed,
+      // which the noise-dominated median |kappa| does not follow); false: relative to 1
   double strength_ratio_min_change = 0.1;  // ... when that median change leaves [1/(1+this), 1+this]; within, against 1
-                                    // (ordinary frames scatter by a few %) (>= 0)
-  bool floor_follows_exposure = true;  // for a tracked point, min_abs_curvature follows the frames' common raw
-                                    // curvature change since the point was detected (exposure steps, smoothing
-                                    // changes), down to 1/16 of it: a darkening does not end the tracks that the
-                                    // relative tests keep; new points always need the full floor (false: fixed floor)
-  double min_track_sharpness = 0.05;// ... or when the peak it climbed to has peakSharpness() below this [1/px^2]:
-                                    // a ridge or plateau of kappa lets the position slide (0 = off)
+                                           // (ordinary frames scatter by a few %) (>= 0)
+  bool floor_follows_exposure = true;      // for a tracked point, min_abs_curvature follows the frames' common raw
+                                           // curvature change since the point was detected (exposure steps, smoothing
+                                           // changes), down to 1/16 of it: a darkening does not end the tracks that the
+      // relative tests keep; new points always need the full floor (false: fixed floor)
+  double min_track_sharpness = 0.05;      // ... or when the peak it climbed to has peakSharpness() below this [1/px^2]:
+                                          // a ridge or plateau of kappa lets the position slide (0 = off)
   bool strength_at_subpixel_peak = true;  // the weak / strength-change checks use the height of the fitted
-                                    // sub-pixel peak (true) or kappa at the integer maximum (false)
-  double extremum_weight = 0.3;     // (0, 1]: reported position = x_p + w * (extremum - x_p), x_p = the previous
-                                    // position carried over by patch alignment on the smoothed images (a
-                                    // complementary filter: the extremum anchors against drift, the patch
-                                    // removes its frame-to-frame jitter); 1 = the extremum alone (off)
-  int align_radius_px = 4;          // patch of that alignment: (2r+1)^2 px, r in [1, 4]
-  int align_iterations = 2;         // its Gauss-Newton steps (>= 1)
-  bool align_gain = true;           // that alignment fits a contrast gain per patch as well as the mean on frames
-                                    // whose contrast changed (an exposure step scales the patch; false: mean only)
-  double align_gain_min_change = 0.03;  // ... by more than this fraction, estimated as the cube root of the median
-                                    // peak ratio (kappa is cubic in intensity); 0 = on every frame (>= 0)
-  double max_align_disagreement_px = 1.0;   // confirmation: a track dies when that patch alignment (started
-                                    // from the flow prediction, independent of the climb) fails or ends farther
-                                    // than this from the climbed extremum [px]: the climb jumped to a neighbouring
-                                    // extremum (0 = off; needs extremum_weight < 1)
+                                          // sub-pixel peak (true) or kappa at the integer maximum (false)
+  double extremum_weight = 0.3;           // (0, 1]: reported position = x_p + w * (extremum - x_p), x_p = the previous
+                                          // position carried over by patch alignment on the smoothed images (a
+                                          // complementary filter: the extremum anchors against drift, the patch
+                                          // removes its frame-to-frame jitter); 1 = the extremum alone (off)
+  int align_radius_px = 4;                // patch of that alignment: (2r+1)^2 px, r in [1, 4]
+  int align_iterations = 2;               // its Gauss-Newton steps (>= 1)
+  bool align_gain = true;                 // that alignment fits a contrast gain per patch as well as the mean on frames
+      // whose contrast changed (an exposure step scales the patch; false: mean only)
+  double align_gain_min_change = 0.03;     // ... by more than this fraction, estimated as the cube root of the median
+                                           // peak ratio (kappa is cubic in intensity); 0 = on every frame (>= 0)
+  double max_align_disagreement_px = 1.0;  // confirmation: a track dies when that patch alignment (started
+                                           // from the flow prediction, independent of the climb) fails or ends farther
+      // than this from the climbed extremum [px]: the climb jumped to a neighbouring
+      // extremum (0 = off; needs extremum_weight < 1)
   double confirm_max_unaligned_fraction = 1.0;  // [0, 1]: that check is skipped on a frame where the patch
-                                    // alignment fails for more than this fraction of the tracks (1 = never)
-  bool refine_flow = true;          // refit A, b to the tracked points (GM, down to 1 px) and track again from it
-  bool predict_parallax = true;     // add each point's last residual to the dominant flow (x_bar = A x + b + r)
+                                                // alignment fails for more than this fraction of the tracks (1 = never)
+  bool refine_flow = true;       // refit A, b to the tracked points (GM, down to 1 px) and track again from it
+  bool predict_parallax = true;  // add each point's last residual to the dominant flow (x_bar = A x + b + r)
   // --- execution ---
-  int threads = 2;                  // stripes run in parallel (cv::parallel_for_); 1 = serial (>= 1)
+  int threads = 2;  // stripes run in parallel (cv::parallel_for_); 1 = serial (>= 1)
 
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
 };
 
 struct TrackedPoint {
-  std::uint64_t id = 0;             // stable while the point is tracked
+  std::uint64_t id = 0;                          // stable while the point is tracked
   Eigen::Vector2f uv = Eigen::Vector2f::Zero();  // sub-pixel position in the input (distorted) image
-  int age = 0;                      // frames tracked before this one (0 = detected in this frame)
-  float curvature = 0.f;            // normalized kappa at uv (sign tells min/max)
-  std::uint8_t intensity = 0;       // input image intensity at the nearest pixel
+  int age = 0;                                   // frames tracked before this one (0 = detected in this frame)
+  float curvature = 0.f;                         // normalized kappa at uv (sign tells min/max)
+  std::uint8_t intensity = 0;                    // input image intensity at the nearest pixel
 };
 
 struct TrackerFrame {
   double timestamp = 0;
-  std::vector<TrackedPoint> points;  // all live points of this frame (tracked first, then new)
+  std::vector<TrackedPoint> points;                 // all live points of this frame (tracked first, then new)
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();  // dominant flow prev -> cur: y = A x + b
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
-  bool flow_ok = false;              // the affine fit had >= flow_min_matches inliers
-  int flow_matches = 0;              // BRIEF matches used by the fit (after cross-check/ratio)
+  bool flow_ok = false;  // the affine fit had >= flow_min_matches inliers
+  int flow_matches = 0;  // BRIEF matches used by the fit (after cross-check/ratio)
   int num_tracked = 0, num_new = 0, num_lost = 0;
   // num_lost by the check that ended the track: "climb" (no local maximum of F
   // near the prediction), "weak" (below min_track_curvature), "strength_change"
@@ -130,12 +134,12 @@ struct TrackerFrame {
   // (a static string), so that the losses of mapped tracks can be told apart
   // from the churn of young ones.
   std::vector<std::pair<std::uint64_t, const char*>> ended;
-  double noise_ratio = 0;            // estimated image noise sigma / median |gradient| of this frame
-  double smoothing_sigma = 0;        // pre-smoothing used for this frame [px]
-  double curvature_scale = 0;        // median |kappa| of this frame (the unit of the normalized curvature)
-  double strength_ratio = 1;         // median over the climbed tracks of new / old normalized strength (1 when
-                                     // relative_strength_change is off or too few tracks)
-  double patch_gain = 1;             // median contrast gain of the patch alignment (1 where no gain was fitted)
+  double noise_ratio = 0;                   // estimated image noise sigma / median |gradient| of this frame
+  double smoothing_sigma = 0;               // pre-smoothing used for this frame [px]
+  double curvature_scale = 0;               // median |kappa| of this frame (the unit of the normalized curvature)
+  double strength_ratio = 1;                // median over the climbed tracks of new / old normalized strength (1 when
+                                            // relative_strength_change is off or too few tracks)
+  double patch_gain = 1;                    // median contrast gain of the patch alignment (1 where no gain was fitted)
   std::map<std::string, double> timing_ms;  // "curvature", "flow", "track", "detect", "total"
 };
 

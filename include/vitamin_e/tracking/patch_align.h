@@ -10,9 +10,9 @@
 namespace vitamin_e::tracking {
 
 struct PatchAlignParams {
-  int radius = 2;          // patch is (2r+1)^2 pixels, r in [1, 4]
-  int iterations = 2;      // Gauss-Newton steps (>= 1)
-  float max_shift = 1.0f;  // fail if the result is farther than this from the start [px]
+  int radius = 2;                // patch is (2r+1)^2 pixels, r in [1, 4]
+  int iterations = 2;            // Gauss-Newton steps (>= 1)
+  float max_shift = 1.0f;        // fail if the result is farther than this from the start [px]
   bool compensate_gain = false;  // also fit a contrast gain a: cur - mean = a (prev - mean); fails when
                                  // a leaves [1/4, 4] (the patch lost or inverted its contrast)
 };

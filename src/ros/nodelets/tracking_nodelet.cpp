@@ -84,8 +84,7 @@ void TrackingNodelet::onInit() {
     }
     system_config_.validate();
   } catch (const std::exception& e) {
-    NODELET_FATAL("~config_file '%s': %s (no subscription: fix the config and restart)", config_file.c_str(),
-                  e.what());
+    NODELET_FATAL("~config_file '%s': %s (no subscription: fix the config and restart)", config_file.c_str(), e.what());
     return;
   }
   NODELET_INFO("SLAM config %s:\n%s", config_file.empty() ? "(defaults)" : config_file.c_str(),
@@ -131,8 +130,7 @@ void TrackingNodelet::onInit() {
 
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<vitamin_e::TrackingConfig>>(reconfigure_mutex_, pnh);
-  reconfigure_server_->setCallback(
-      [this](vitamin_e::TrackingConfig& c, uint32_t level) { reconfigure(c, level); });
+  reconfigure_server_->setCallback([this](vitamin_e::TrackingConfig& c, uint32_t level) { reconfigure(c, level); });
 
   reset_srv_ = pnh.advertiseService("reset", &TrackingNodelet::resetService, this);
   save_trajectory_srv_ = pnh.advertiseService("save_trajectory", &TrackingNodelet::saveTrajectoryService, this);
@@ -177,7 +175,8 @@ void TrackingNodelet::onInit() {
       T_b_c_ = calibration.T_b_c;
       if (rectified_) {
         NODELET_WARN("%s looks rectified, but ~calibration_file describes the camera with its distortion: "
-                     "set ~rectified false if the file is the rectified camera's", image_topic.c_str());
+                     "set ~rectified false if the file is the rectified camera's",
+                     image_topic.c_str());
       }
       if (!createSystem(calibration.camera)) return;
     } catch (const std::exception& e) {
@@ -247,8 +246,9 @@ bool TrackingNodelet::subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle
   const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
   transport_ = hints.getTransport();
   const auto loadable = it_->getLoadableTransports();
-  const bool available = std::find(loadable.begin(), loadable.end(), "image_transport/" + transport_) != loadable.end() ||
-                         std::find(loadable.begin(), loadable.end(), transport_) != loadable.end();
+  const bool available =
+      std::find(loadable.begin(), loadable.end(), "image_transport/" + transport_) != loadable.end() ||
+      std::find(loadable.begin(), loadable.end(), transport_) != loadable.end();
   const uint32_t queue = static_cast<uint32_t>(std::max(1, queue_size));
   const char* mode = process_all_frames_ ? "every frame processed: the SLAM queue waits when full"
                                          : "live: the SLAM takes the newest frame, stale frames are dropped";
@@ -427,8 +427,8 @@ void TrackingNodelet::enqueue(cv::Mat gray, const std_msgs::Header& header) {
   }
   if (gray.cols != camera_width_ || gray.rows != camera_height_) {
     noteRejected();
-    NODELET_ERROR_THROTTLE(2.0, "image dropped: size %dx%d, calibration is %dx%d", gray.cols, gray.rows,
-                           camera_width_, camera_height_);
+    NODELET_ERROR_THROTTLE(2.0, "image dropped: size %dx%d, calibration is %dx%d", gray.cols, gray.rows, camera_width_,
+                           camera_height_);
     return;
   }
   QueuedFrame frame;

@@ -153,7 +153,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::string camera_frame_;  // empty: the image's frame_id
   std::string odom_frame_;
   std::string base_frame_;
-  std::string body_frame_;    // frame of the calibration's T_BS (camera in body/IMU)
+  std::string body_frame_;  // frame of the calibration's T_BS (camera in body/IMU)
   std::string imu_topic_;
   std::string trajectory_file_;
   std::string transport_ = "raw";

@@ -8,9 +8,9 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
-#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/image_encodings.h>
+#include <opencv2/imgproc.hpp>
 
 #include "tracking_nodelet.h"
 #include "vitamin_e/TrackedFrame.h"
@@ -279,8 +279,7 @@ void TrackingNodelet::publishTrackingImage(const FrameResult& result, const std_
   track_history_ = std::move(alive);
   const std::string text = std::string(vitamin_e::pipeline::toString(result.state)) + "  tracks " +
                            std::to_string(result.num_tracked) + "  mapped " + std::to_string(result.num_mapped);
-  cv::putText(out.image, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 255), 1,
-              cv::LINE_AA);
+  cv::putText(out.image, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 255), 1, cv::LINE_AA);
   tracking_image_pub_.publish(out.toImageMsg());
 }
 

@@ -14,9 +14,9 @@
 
 #include <dynamic_reconfigure/server.h>
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "save_file_service.h"
 #include "vitamin_e/SaveFile.h"
@@ -197,8 +197,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
         changed_ = true;
       }
     } catch (const std::exception& e) {
-      NODELET_ERROR_THROTTLE(2.0, "frame %lu not fused: %s", static_cast<unsigned long>(msg->frame_index),
-                             e.what());
+      NODELET_ERROR_THROTTLE(2.0, "frame %lu not fused: %s", static_cast<unsigned long>(msg->frame_index), e.what());
     }
   }
 
@@ -228,9 +227,8 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
       *message = "cannot write mesh " + path + ": " + error;
       return false;
     }
-    *message = "mesh (" + std::to_string(mesh.vertices.size()) + " vertices, " +
-               std::to_string(mesh.faces.size()) + " triangles, " + std::to_string(frames_integrated_) +
-               " frames, PLY) written to " + path;
+    *message = "mesh (" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.faces.size()) +
+               " triangles, " + std::to_string(frames_integrated_) + " frames, PLY) written to " + path;
     changed_ = true;  // extractMesh consumed the change set: republish on the next tick
     return true;
   }
