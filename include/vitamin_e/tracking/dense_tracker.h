@@ -61,23 +61,23 @@ struct TrackerConfig {
   double lambda = 8.0;          // weight of the prediction prior in F, in normalized-curvature units (>= 0)
   double track_sigma_px = 1.5;  // Geman-McClure sigma of w(|x - x_bar|) [px] (> 0)
   int max_climb_steps = 12;     // hill-climbing steps (8-neighbour moves) before giving up (>= 1)
-  double prediction_blend =
-      0.3;  // [0, 1): move the sub-pixel extremum this far toward x_bar when within 1 px (temporal filter; 0 = pure extremum);
-      // replaced by the patch filter (extremum_weight < 1) where the patch alignment succeeds
-  int polish_steps =
-      0;  // after maximizing F, climb kappa alone (no prior) up to this many steps; 0 = off (the prior helps on noisy images)
-  double fb_threshold_px = 1.0;          // forward-backward check: max distance back to the old position [px] (> 0)
-  double min_track_curvature = 0.5;      // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
-  double max_curvature_ratio = 1.5;      // ... or when its normalized |kappa| changes by more than this factor (>= 1)
-  bool relative_strength_change = true;  // ... relative to the frame's median change over all climbed tracks
-                                         // (an exposure step scales every peak by about the brightness ratio cubed,
-      // which the noise-dominated median |kappa| does not follow); false: relative to 1
+  // [0, 1): move the sub-pixel extremum this far toward x_bar when within 1 px (temporal filter; 0 = pure
+  // extremum); replaced by the patch filter (extremum_weight < 1) where the patch alignment succeeds
+  double prediction_blend = 0.3;
+  // after maximizing F, climb kappa alone (no prior) up to this many steps; 0 = off (the prior helps on noisy images)
+  int polish_steps = 0;
+  double fb_threshold_px = 1.0;      // forward-backward check: max distance back to the old position [px] (> 0)
+  double min_track_curvature = 0.5;  // a tracked point dies when s*kappa/median|kappa| falls below this (>= 0)
+  double max_curvature_ratio = 1.5;  // ... or when its normalized |kappa| changes by more than this factor (>= 1)
+  // ... relative to the frame's median change over all climbed tracks (an exposure step scales every peak by
+  // about the brightness ratio cubed, which the noise-dominated median |kappa| does not follow); false: relative to 1
+  bool relative_strength_change = true;
   double strength_ratio_min_change = 0.1;  // ... when that median change leaves [1/(1+this), 1+this]; within, against 1
                                            // (ordinary frames scatter by a few %) (>= 0)
-  bool floor_follows_exposure = true;      // for a tracked point, min_abs_curvature follows the frames' common raw
-                                           // curvature change since the point was detected (exposure steps, smoothing
-                                           // changes), down to 1/16 of it: a darkening does not end the tracks that the
-      // relative tests keep; new points always need the full floor (false: fixed floor)
+  // for a tracked point, min_abs_curvature follows the frames' common raw curvature change since the point was
+  // detected (exposure steps, smoothing changes), down to 1/16 of it: a darkening does not end the tracks that the
+  // relative tests keep; new points always need the full floor (false: fixed floor)
+  bool floor_follows_exposure = true;
   double min_track_sharpness = 0.05;      // ... or when the peak it climbed to has peakSharpness() below this [1/px^2]:
                                           // a ridge or plateau of kappa lets the position slide (0 = off)
   bool strength_at_subpixel_peak = true;  // the weak / strength-change checks use the height of the fitted
@@ -88,14 +88,15 @@ struct TrackerConfig {
                                           // removes its frame-to-frame jitter); 1 = the extremum alone (off)
   int align_radius_px = 4;                // patch of that alignment: (2r+1)^2 px, r in [1, 4]
   int align_iterations = 2;               // its Gauss-Newton steps (>= 1)
-  bool align_gain = true;                 // that alignment fits a contrast gain per patch as well as the mean on frames
-      // whose contrast changed (an exposure step scales the patch; false: mean only)
-  double align_gain_min_change = 0.03;     // ... by more than this fraction, estimated as the cube root of the median
-                                           // peak ratio (kappa is cubic in intensity); 0 = on every frame (>= 0)
-  double max_align_disagreement_px = 1.0;  // confirmation: a track dies when that patch alignment (started
-                                           // from the flow prediction, independent of the climb) fails or ends farther
-      // than this from the climbed extremum [px]: the climb jumped to a neighbouring
-      // extremum (0 = off; needs extremum_weight < 1)
+  // that alignment fits a contrast gain per patch as well as the mean on frames whose contrast changed (an
+  // exposure step scales the patch; false: mean only)
+  bool align_gain = true;
+  double align_gain_min_change = 0.03;  // ... by more than this fraction, estimated as the cube root of the median
+                                        // peak ratio (kappa is cubic in intensity); 0 = on every frame (>= 0)
+  // confirmation: a track dies when that patch alignment (started from the flow prediction, independent of the
+  // climb) fails or ends farther than this from the climbed extremum [px]: the climb jumped to a neighbouring
+  // extremum (0 = off; needs extremum_weight < 1)
+  double max_align_disagreement_px = 1.0;
   double confirm_max_unaligned_fraction = 1.0;  // [0, 1]: that check is skipped on a frame where the patch
                                                 // alignment fails for more than this fraction of the tracks (1 = never)
   bool refine_flow = true;       // refit A, b to the tracked points (GM, down to 1 px) and track again from it
