@@ -6,6 +6,16 @@ VE_WS="${VE_WS:-$VE_ROOT/.ws}"
 export VE_ROOT VE_WS
 ve_die() { echo "error: $*" >&2; exit 2; }
 ve_info() { echo "[vitamin_e] $*" >&2; }
+# ve_list_path P: a path of a suite list as an absolute path: ../shared/... under VE_SHARED,
+# ../renders/... under VE_RENDERS, other relative paths from the repository root ("" stays "").
+ve_list_path() {
+  case "$1" in
+    /*|"") echo "$1" ;;
+    ../shared/*) echo "${VE_SHARED:-$VE_ROOT/../shared}/${1#../shared/}" ;;
+    ../renders/*) echo "${VE_RENDERS:-$VE_ROOT/../renders}/${1#../renders/}" ;;
+    *) echo "$VE_ROOT/$1" ;;
+  esac
+}
 # Builds a benchmark (unless VE_NO_BUILD=1) and prints the path of its executable.
 ve_bench_bin() {
   if [ "${VE_NO_BUILD:-0}" != 1 ]; then "$VE_ROOT/scripts/build.sh" --target "$1" >&2; fi

@@ -34,20 +34,12 @@ mkdir -p "$out"
 cp "$list" "$out/list.txt"
 ve_suite_info_begin "$out" ./scripts/evaluate_map_reuse.sh "$list" --out "$out" ${run_flags[@]+-- "${run_flags[@]}"}
 
-abs() {
-  case "$1" in
-    /*) echo "$1" ;;
-    ../shared/*) echo "${VE_SHARED:-$VE_ROOT/../shared}/${1#../shared/}" ;;
-    ../renders/*) echo "${VE_RENDERS:-$VE_ROOT/../renders}/${1#../renders/}" ;;
-    *) echo "$VE_ROOT/$1" ;;
-  esac
-}
 declare -A gt_of
 while read -r name dataset map_from rest; do
   [ -z "${name:-}" ] && continue
   case "$name" in \#*) continue ;; esac
   [ -n "${dataset:-}" ] || ve_die "$list: line for '$name' has no DATASET"
-  dataset="$(abs "$dataset")"
+  dataset="$(ve_list_path "$dataset")"
   run="$out/$name"
   mkdir -p "$run"
   rm -f "$run/missing.txt" "$run/stats.json" "$run/trajectory.txt" "$run/evaluate.txt" "$run/evaluate.err" "$run/map.vemap"

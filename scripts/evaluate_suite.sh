@@ -73,17 +73,9 @@ while read -r name dataset gt sensor rest; do
   [ -z "${name:-}" ] && continue
   case "$name" in \#*) continue ;; esac
   [ -n "${dataset:-}" ] || ve_die "$list: line for '$name' has no DATASET_PATH"
-  abs() {
-    case "$1" in
-      /*|"") echo "$1" ;;
-      ../shared/*) echo "${VE_SHARED:-$VE_ROOT/../shared}/${1#../shared/}" ;;
-      ../renders/*) echo "${VE_RENDERS:-$VE_ROOT/../renders}/${1#../renders/}" ;;
-      *) echo "$VE_ROOT/$1" ;;
-    esac
-  }
-  dataset="$(abs "$dataset")"
-  gt="$(abs "${gt:-}")"
-  sensor="$(abs "${sensor:-}")"
+  dataset="$(ve_list_path "$dataset")"
+  gt="$(ve_list_path "${gt:-}")"
+  sensor="$(ve_list_path "${sensor:-}")"
   if [ -z "${gt:-}" ] && [ -f "$dataset/groundtruth_cam0_tum.txt" ]; then
     gt="$dataset/groundtruth_cam0_tum.txt"
   elif [ -z "${gt:-}" ] && [ -f "$dataset/poses.txt" ]; then
