@@ -9,6 +9,8 @@ namespace vitamin_e::map {
 
 void MapConfig::validate() const {
   if (max_keyframes < 2) throw std::invalid_argument("map.max_keyframes must be >= 2");
+  if (!(keyframe_spread_ratio >= 0.0)) throw std::invalid_argument("map.keyframe_spread_ratio must be >= 0");
+  if (keep_newest_keyframes < 1) throw std::invalid_argument("map.keep_newest_keyframes must be >= 1");
   if (!(archive_voxel_m >= 0.0)) throw std::invalid_argument("map.archive_voxel_m must be >= 0");
   if (min_observations_to_archive < 1) throw std::invalid_argument("map.min_observations_to_archive must be >= 1");
   if (max_archive_points < 2) throw std::invalid_argument("map.max_archive_points must be >= 2");
@@ -106,17 +108,36 @@ const Keyframe& Map::addKeyframe(Keyframe keyframe) {
   }
   keyframes_.push_back(std::move(keyframe));
   while (static_cast<int>(keyframes_.size()) > config_.max_keyframes) {
-    Keyframe oldest = std::move(keyframes_.front());
-    keyframes_.pop_front();
-    retireKeyframe(oldest);
+    const std::size_t k = keyframeToRetire();
+    Keyframe retired = std::move(keyframes_[k]);
+    keyframes_.erase(keyframes_.begin() + static_cast<long>(k));
+    retireKeyframe(retired, keyframes_[k].frame_index);
   }
   return keyframes_.back();
 }
 
-void Map::retireKeyframe(const Keyframe& retired) {
-  const std::uint64_t oldest = keyframes_.empty() ? 0 : keyframes_.front().frame_index;
+std::size_t Map::keyframeToRetire() const {
+  const int n = static_cast<int>(keyframes_.size());
+  if (!(config_.keyframe_spread_ratio > 0.0) || n < 3) return 0;
+  auto centre = [&](int k) { return keyframes_[static_cast<std::size_t>(k)].T_w_c.translation(); };
+  const double oldest_gap = (centre(1) - centre(0)).norm();
+  int best = 0;
+  double best_gap = config_.keyframe_spread_ratio * oldest_gap;
+  for (int k = 1; k + config_.keep_newest_keyframes < n; ++k) {
+    const double gap = (centre(k + 1) - centre(k - 1)).norm();
+    if (gap < best_gap) {
+      best_gap = gap;
+      best = k;
+    }
+  }
+  return static_cast<std::size_t>(best);
+}
+
+void Map::retireKeyframe(const Keyframe& retired, std::uint64_t next_keyframe) {
   // Landmarks that lost their last keyframe observation while still tracked:
-  // retire them once they are no longer seen either.
+  // retire them once they are no longer seen either (not since the keyframe
+  // after the retired one).
+  const std::uint64_t oldest = next_keyframe;
   std::vector<std::uint64_t> still_orphans;
   for (std::uint64_t id : orphans_) {
     auto it = landmarks_.find(id);
@@ -347,7 +368,7 @@ void Map::restore(const MapSnapshot& s) {
   while (static_cast<int>(keyframes_.size()) > config_.max_keyframes) {
     Keyframe oldest = std::move(keyframes_.front());
     keyframes_.pop_front();
-    retireKeyframe(oldest);
+    retireKeyframe(oldest, keyframes_.front().frame_index);
   }
 }
 

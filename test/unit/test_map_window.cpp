@@ -205,3 +205,61 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+namespace {
+Keyframe keyframeAt(std::uint64_t frame, double x) {
+  Keyframe kf = keyframeSeeing(frame, 1000 * frame, 1);
+  kf.T_w_c.translation() = Eigen::Vector3d(x, 0, 0);
+  return kf;
+}
+std::vector<std::uint64_t> windowFrames(const Map& map) {
+  std::vector<std::uint64_t> f;
+  for (const Keyframe& kf : map.keyframes()) f.push_back(kf.frame_index);
+  return f;
+}
+}  // namespace
+
+TEST(Map, EvenlySpacedKeyframesLeaveOldestFirst) {
+  MapConfig cfg;
+  cfg.max_keyframes = 4;
+  cfg.keyframe_spread_ratio = 1.5;  // merging two 1 m gaps (2 m) is wider than 1.5 x the oldest gap
+  Map map(cfg);
+  for (std::uint64_t k = 0; k < 6; ++k) map.addKeyframe(keyframeAt(k, double(k)));
+  EXPECT_EQ(windowFrames(map), (std::vector<std::uint64_t>{2, 3, 4, 5}));
+}
+
+TEST(Map, CrowdedKeyframesDoNotPushOutTheWiderSpacedOnes) {
+  MapConfig cfg;
+  cfg.max_keyframes = 5;
+  cfg.keyframe_spread_ratio = 1.5;
+  cfg.keep_newest_keyframes = 2;
+  Map map(cfg);
+  // 1 m apart, then a turn on the spot: 5 cm apart.
+  map.addKeyframe(keyframeAt(0, 0.0));
+  map.addKeyframe(keyframeAt(1, 1.0));
+  map.addKeyframe(keyframeAt(2, 2.0));
+  for (std::uint64_t k = 3; k < 9; ++k) {
+    map.addLandmark(newLandmark(1000 * k, Eigen::Vector3d(0, 0, 5), 1, k));  // seen by keyframe k only
+    map.addKeyframe(keyframeAt(k, 2.0 + 0.05 * double(k - 2)));
+  }
+  const std::vector<std::uint64_t> f = windowFrames(map);
+  ASSERT_EQ(f.size(), 5u);
+  // The oldest (1 m gaps) stay; crowded ones in the middle left; the newest two are kept.
+  EXPECT_EQ(f[0], 0u);
+  EXPECT_EQ(f[1], 1u);
+  EXPECT_EQ(f[3], 7u);
+  EXPECT_EQ(f[4], 8u);
+  // The landmark only a retired middle keyframe saw, no longer tracked, left with it.
+  EXPECT_EQ(map.landmark(3000), nullptr);
+  EXPECT_NE(map.landmark(8000), nullptr);
+}
+
+TEST(Map, SpreadRatioZeroAlwaysRetiresTheOldest) {
+  MapConfig cfg;
+  cfg.max_keyframes = 3;
+  Map map(cfg);
+  map.addKeyframe(keyframeAt(0, 0.0));
+  map.addKeyframe(keyframeAt(1, 1.0));
+  for (std::uint64_t k = 2; k < 6; ++k) map.addKeyframe(keyframeAt(k, 1.0 + 0.01 * double(k)));
+  EXPECT_EQ(windowFrames(map), (std::vector<std::uint64_t>{3, 4, 5}));
+}

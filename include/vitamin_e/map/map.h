@@ -82,8 +82,15 @@ struct MapSnapshot {
 };
 
 struct MapConfig {
-  int max_keyframes = 8;         // keyframes kept in the active window
-  double archive_voxel_m = 0.0;  // 0: archive every retired landmark; >0: one per voxel (map units)
+  int max_keyframes = 8;  // keyframes kept in the active window
+  // Which keyframe leaves a full window. 0: the oldest. > 0: a middle one when
+  // removing it leaves a gap between its neighbours (camera centres) shorter than
+  // this x the oldest gap: keyframes crowded along a short stretch (a turn makes
+  // one per frame) then do not push the older, wider-spaced ones out, and the
+  // window keeps its baseline. Protects the newest keep_newest_keyframes.
+  double keyframe_spread_ratio = 0.0;
+  int keep_newest_keyframes = 3;  // never chosen by keyframe_spread_ratio (>= 1)
+  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
   // re-thins the archive to at most half the cap.
@@ -131,9 +138,10 @@ class Map {
   int flagOutlier(std::uint64_t id);
 
   // Adds a keyframe (its observations are attached to the existing landmarks);
-  // retires the oldest beyond max_keyframes. Landmarks that no active keyframe
-  // observes any more and that were not seen since the oldest active keyframe
-  // are archived (if well observed) and removed.
+  // retires one beyond max_keyframes (the oldest, or a crowded middle one: see
+  // keyframe_spread_ratio). Landmarks that no active keyframe observes any more
+  // and that were not seen since the retired keyframe's successor are archived
+  // (if well observed) and removed.
   const Keyframe& addKeyframe(Keyframe keyframe);
   void setKeyframePose(std::size_t index, const Eigen::Isometry3d& T_w_c);  // index into keyframes()
 
@@ -159,7 +167,8 @@ class Map {
   std::vector<ArchivedPoint> allPoints() const;
 
  private:
-  void retireKeyframe(const Keyframe& keyframe);
+  void retireKeyframe(const Keyframe& keyframe, std::uint64_t next_keyframe);  // frame index of its successor
+  std::size_t keyframeToRetire() const;           // index into keyframes_ (see MapConfig::keyframe_spread_ratio)
   void retireLandmark(const Landmark& landmark);  // to the archive and the dormant landmarks
   void archive(const Landmark& landmark);
   void coarsenArchive();
