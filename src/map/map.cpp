@@ -99,6 +99,13 @@ void Map::setKeyframePose(std::size_t index, const Eigen::Isometry3d& T_w_c) {
   if (index < keyframes_.size()) keyframes_[index].T_w_c = T_w_c;
 }
 
+void Map::rescale(const Eigen::Vector3d& centre_w, double factor) {
+  auto scaled = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d { return centre_w + factor * (x - centre_w); };
+  for (Keyframe& k : keyframes_) k.T_w_c.translation() = scaled(k.T_w_c.translation());
+  for (auto& kv : landmarks_) kv.second.p_w = scaled(kv.second.p_w);
+  for (DormantLandmark& d : dormant_) d.p_w = scaled(d.p_w);
+}
+
 const Keyframe& Map::addKeyframe(Keyframe keyframe) {
   for (const auto& obs : keyframe.observations) {
     if (Landmark* l = find(obs.first)) {

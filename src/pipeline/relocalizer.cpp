@@ -176,6 +176,13 @@ std::vector<std::size_t> Relocalizer::spread(const FrameContext& frame, const st
   return out;
 }
 
+void Relocalizer::rescale(const Eigen::Vector3d& centre_w, double factor) {
+  for (Entry& e : entries_) {
+    e.T_w_c.translation() = centre_w + factor * (e.T_w_c.translation() - centre_w);
+    for (Point& p : e.points) p.p_w = centre_w + factor * (p.p_w - centre_w);
+  }
+}
+
 void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, const Eigen::Isometry3d& T_w_c) {
   if (!config_.enabled || image.empty()) return;
   Entry e;

@@ -201,6 +201,31 @@ TEST(Map, RejectsBadConfig) {
   EXPECT_THROW(Map{cap}, std::invalid_argument);
 }
 
+TEST(Map, RescaleMovesTheMapAboutACentreButNotTheArchive) {
+  MapConfig cfg;
+  cfg.max_keyframes = 2;
+  cfg.min_observations_to_archive = 1;
+  Map map(cfg);
+  map.addLandmark(newLandmark(1, Eigen::Vector3d(0, 0, 5), 1, 0));
+  map.addKeyframe(keyframeSeeing(0, 1, 1));
+  map.addLandmark(newLandmark(2, Eigen::Vector3d(2, 0, 5), 1, 1));
+  Keyframe kf = keyframeSeeing(1, 2, 1);
+  kf.T_w_c.translation() = Eigen::Vector3d(1, 0, 0);
+  map.addKeyframe(kf);
+  map.addLandmark(newLandmark(3, Eigen::Vector3d(4, 0, 5), 1, 2));
+  map.addKeyframe(keyframeSeeing(2, 3, 1));  // keyframe 0 and landmark 1 retire
+  ASSERT_EQ(map.archive().size(), 1u);
+  ASSERT_EQ(map.dormant().size(), 1u);
+  const Eigen::Vector3d centre(1, 0, 0);
+  map.rescale(centre, 2.0);
+  EXPECT_TRUE(map.landmark(2)->p_w.isApprox(Eigen::Vector3d(3, 0, 10)));
+  EXPECT_TRUE(map.landmark(3)->p_w.isApprox(Eigen::Vector3d(7, 0, 10)));
+  EXPECT_TRUE(map.keyframes().front().T_w_c.translation().isApprox(centre));  // at the centre: unmoved
+  EXPECT_TRUE(map.keyframes().back().T_w_c.translation().isApprox(Eigen::Vector3d(-1, 0, 0)));
+  EXPECT_TRUE(map.dormant().front().p_w.isApprox(Eigen::Vector3d(-1, 0, 10)));
+  EXPECT_TRUE(map.archive().front().p_w.isApprox(Eigen::Vector3d(0, 0, 5)));  // exported as it was made
+}
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

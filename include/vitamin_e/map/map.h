@@ -144,6 +144,10 @@ class Map {
   // (if well observed) and removed.
   const Keyframe& addKeyframe(Keyframe keyframe);
   void setKeyframePose(std::size_t index, const Eigen::Isometry3d& T_w_c);  // index into keyframes()
+  // A change of the map's scale: keyframe centres, landmarks and dormant landmarks
+  // move to centre + factor (x - centre). The archive keeps the scale it was made
+  // in (it is exported with the trajectory of its time). factor > 0.
+  void rescale(const Eigen::Vector3d& centre_w, double factor);
 
   // Re-association (map reuse). relabelLandmark gives an active landmark whose
   // track ended the id of a new track seen at the same place: the keyframes'

@@ -66,6 +66,8 @@ class Relocalizer {
   // point is still a landmark, else from the index.
   Relocalization relocalize(const cv::Mat& image, const FrameContext& frame, const map::Map& map) const;
   void clear();
+  // The map was rescaled (map::Map::rescale): the indexed poses and points follow.
+  void rescale(const Eigen::Vector3d& centre_w, double factor);
   // The index as plain data (oldest keyframe first), e.g. for the map file, and
   // back: importEntries replaces the index (the newest max_keyframes are kept).
   // Descriptors are only comparable between equal descriptorSettings().
