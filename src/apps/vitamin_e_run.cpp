@@ -40,7 +40,7 @@ namespace pl = vitamin_e::pipeline;
 
 namespace {
 
-const char* kUsage =
+const char* const kUsage =
     "usage: vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]\n"
     "                     [--max-frames N] [--start-frame N] [--quiet] [--check]\n"
     "                     [--load-map FILE [--localization-only]] [--save-map FILE]\n"
@@ -86,7 +86,9 @@ const char* kUsage =
     "                   the median angle of their rays since the first keyframe after their detection,\n"
     "                   keyframes in the window\n"
     "  reloc=OUTCOME:I/M  relocalization tried: relocalized, not_found or did_not_hold, P3P inliers\n"
-    "                   of M descriptor matches (only on relocalizing frames)\n";
+    "                   of M descriptor matches (only on relocalizing frames)\n"
+    "  ground=H/I scale=F  ground.enabled, at keyframes: camera height above the road plane (map units,\n"
+    "                   I road points) and the factor the map was scaled by (only when a plane was found)\n";
 
 volatile std::sig_atomic_t g_stop = 0;
 extern "C" void onSignal(int) { g_stop = 1; }
@@ -123,6 +125,11 @@ std::string formatDiagnostics(const pl::FrameDiagnostics& d) {
   if (!d.relocalization.empty()) {
     out += " reloc=" + d.relocalization + ":" + std::to_string(d.relocalization_inliers) + "/" +
            std::to_string(d.relocalization_matches);
+  }
+  if (d.ground_height > 0.0) {
+    char g[96];
+    std::snprintf(g, sizeof(g), " ground=%.4f/%d scale=%.4f", d.ground_height, d.ground_inliers, d.scale_correction);
+    out += g;
   }
   return out;
 }

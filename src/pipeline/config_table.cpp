@@ -8,7 +8,7 @@ namespace vitamin_e::pipeline::detail {
 
 namespace {
 
-const char* kFocal = "the camera's focal length, (fx + fy) / 2: converts the pixel thresholds";
+const char* const kFocal = "the camera's focal length, (fx + fy) / 2: converts the pixel thresholds";
 
 }  // namespace
 
@@ -233,6 +233,33 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("min_inlier_ratio", &r.min_inlier_ratio, "P3P inliers / descriptor matches needed, (0, 1]");
   t.key("upside_down", &r.upside_down, "also look for the frame turned by 180 degrees (a rolled camera)");
 
+  // --- ground ---
+  t.section("ground");
+  auto& g = c.ground;
+  t.key("enabled", &g.enabled,
+        "ground vehicle: hold the camera's height above the road plane constant (the map's scale); off for drones "
+        "and hand-held cameras");
+  t.key("max_step_height_ratio", &g.max_step_height_ratio,
+        "no measurement when the camera moved more than this x its height in the last frame (> 0): at speed the "
+        "road's near points are lost and the far ones bias the plane");
+  t.key("reference_keyframes", &g.reference_keyframes,
+        "the first keyframes with a road plane set the height kept (their median, >= 1)");
+  t.key("window", &g.window, "the map's current height is the median of this many last measurements (>= 1)");
+  t.key("tolerance", &g.tolerance,
+        "a scale error (reference / current height - 1) within this share is noise: no correction, [0, 1)");
+  t.key("gain", &g.gain, "share of the scale error beyond the tolerance corrected at each keyframe, (0, 1]");
+  t.key("max_change", &g.max_change,
+        "a plane whose height is off the map's current one by more than this share is not taken for the road, (0, 1)");
+  t.key("max_tilt_deg", &g.plane.max_tilt_deg,
+        "largest angle between the road's normal and the camera's down (y) axis [deg], (0, 90)");
+  t.key("min_depression_deg", &g.plane.min_depression_deg,
+        "road candidates: map points at least this angle below the optical axis [deg], [0, 90)");
+  t.key("inlier_ratio", &g.plane.inlier_ratio, "a road point is within this x the camera height of the plane, (0, 1)");
+  t.key("min_inliers", &g.plane.min_inliers, "fewer road points: no measurement at this keyframe (>= 3)");
+  t.key("min_inlier_fraction", &g.plane.min_inlier_fraction,
+        "fewer road points than this share of the candidates: no measurement, [0, 1]");
+  t.key("iterations", &g.plane.iterations, "RANSAC samples of the plane fit (>= 1)");
+
   // --- dense ---
   t.section("dense");
   auto& d = c.dense;
@@ -306,6 +333,10 @@ const std::vector<SectionInfo>& configSections() {
                    "(include/vitamin_e/pipeline/system_config_types.h)."},
       {"relocalization", "Finding a lost camera again in the map: `pipeline::RelocalizerConfig` "
                          "(include/vitamin_e/pipeline/relocalizer.h)."},
+      {"ground", "Scale from the road, for a camera on a ground vehicle (off by default): at each keyframe the "
+                 "road plane under the camera measures the camera's height, and the map is scaled to keep it: "
+                 "`pipeline::GroundScaleConfig` (include/vitamin_e/pipeline/ground_scale.h), the plane fit "
+                 "`geometry::GroundPlaneConfig` (include/vitamin_e/geometry/ground_plane.h)."},
       {"dense", "Dense reconstruction in map units (the map unit is the median scene depth at initialization): "
                 "frame mesh, NLTGV2-L1 smoothing, pruning, TSDF fusion: `fusion::DenseMapperConfig` "
                 "(include/vitamin_e/fusion/dense_mapper.h). Run on the SLAM's per-frame points by vitamin_e_run and "

@@ -41,6 +41,7 @@ System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
       reuse(config, cam),
       mapper(config, cam),
       relocalizer(config.relocalization, cam, config.pnp),
+      ground(config.ground),
       map(cfg.map) {}
 
 TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
@@ -164,6 +165,7 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   result->diagnostics.keyframe = true;
   result->diagnostics.triangulated = static_cast<int>(m.landmarks.size());
   map.clear();
+  ground.reset();  // a new map, a new scale
   for (const map::NewLandmark& l : m.landmarks) map.addLandmark(l);
   map.addKeyframe(std::move(m.reference));
   map.addKeyframe(std::move(m.current));
@@ -358,6 +360,7 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
       motion.correctLast(T_w_c);
       if (!trajectory.empty()) trajectory.back().T_w_c = T_w_c;
       relocalizer.addKeyframe(frame.image, frame, T_w_c);
+      if (ground.enabled()) holdGroundScale(frame, T_w_c, &d);
     }
     // Median depth of the mapped points in view: the map's scale at this place.
     std::vector<double> depths;
@@ -371,6 +374,27 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
   result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_c;
+}
+
+void System::Impl::holdGroundScale(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d) {
+  std::vector<Eigen::Vector3d> points_c;
+  points_c.reserve(frame.landmarks.size());
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+  for (const map::Landmark* l : frame.landmarks) {
+    if (l) points_c.push_back(T_c_w * l->p_w);
+  }
+  const ScaleCorrection c = ground.update(points_c, motion.lastStepLength());
+  d->ground_height = c.measured ? c.height : 0.0;
+  d->ground_inliers = c.inliers;
+  d->scale_correction = c.factor;
+  if (c.factor == 1.0) return;
+  // A similarity about the camera centre: the BA's cost and this pose do not
+  // change, the steps from here on are in the corrected scale.
+  const Eigen::Vector3d centre = T_w_c.translation();
+  map.rescale(centre, c.factor);
+  relocalizer.rescale(centre, c.factor);
+  motion.rescale(c.factor);
+  scene_depth *= c.factor;
 }
 
 void System::Impl::diagnosePreviousMapPoints(const FrameContext& frame, const EndedTracks& ended,

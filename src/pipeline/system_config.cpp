@@ -99,6 +99,7 @@ void SystemConfig::validate() const {
   component("ba", [&] { ba.validate(); });
   component("map", [&] { map.validate(); });
   component("relocalization", [&] { relocalization.validate(); });
+  component("ground", [&] { ground.validate(); });
   component("dense", [&] { dense.validate(); });
   auto check = [](bool ok, const std::string& what) {
     if (!ok) throw ConfigError(what);

@@ -10,6 +10,7 @@
 
 #include "vitamin_e/map/map.h"
 #include "vitamin_e/pipeline/front_end.h"
+#include "vitamin_e/pipeline/ground_scale.h"
 #include "vitamin_e/pipeline/initializer.h"
 #include "vitamin_e/pipeline/localizer.h"
 #include "vitamin_e/pipeline/map_reuse.h"
@@ -49,6 +50,9 @@ struct System::Impl {
   void relocalize(FrameContext& frame, FrameResult* result);
   bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
+  // At a keyframe: the road plane under the camera measures the map's scale
+  // (ground.enabled); a correction rescales everything that holds map units.
+  void holdGroundScale(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
   // Diagnostics: where the previous frame's map points went (still tracked,
   // ended by reason, out of view or in view at T_w_c).
@@ -66,6 +70,7 @@ struct System::Impl {
   MapReuse reuse;
   Mapper mapper;
   Relocalizer relocalizer;
+  GroundScale ground;
   // shared across frames (mapping thread only)
   map::Map map;
   MotionModel motion;

@@ -83,6 +83,8 @@ inline pipeline::SystemConfig drivingConfig(double scale = 0.5) {
   c.init_min_disparity_px *= scale;
   c.keyframe_parallax_px *= scale;
   c.min_init_tracks = static_cast<int>(std::lround(c.min_init_tracks * scale));
+  // a count of map points, which scale with the point budget
+  c.ground.plane.min_inliers = std::max(3, static_cast<int>(std::lround(c.ground.plane.min_inliers * scale * scale)));
   return c;
 }
 

@@ -134,9 +134,9 @@ TEST(ConfigTable, CoversEveryMemberOfEveryStruct) {
   }
   const auto& d = c.dense;
   const Region system = regionOf(c, c);
-  const std::vector<Region> system_parts = {regionOf(c, c.tracker),        regionOf(c, c.init), regionOf(c, c.pnp),
-                                            regionOf(c, c.triangulation),  regionOf(c, c.ba),   regionOf(c, c.map),
-                                            regionOf(c, c.relocalization), regionOf(c, c.dense)};
+  const std::vector<Region> system_parts = {regionOf(c, c.tracker),        regionOf(c, c.init),   regionOf(c, c.pnp),
+                                            regionOf(c, c.triangulation),  regionOf(c, c.ba),     regionOf(c, c.map),
+                                            regionOf(c, c.relocalization), regionOf(c, c.ground), regionOf(c, c.dense)};
   const std::vector<Region> dense_parts = {regionOf(c, d.mesher), regionOf(c, d.prune), regionOf(c, d.nltgv),
                                            regionOf(c, d.integrator)};
   struct Expect {
@@ -161,6 +161,10 @@ TEST(ConfigTable, CoversEveryMemberOfEveryStruct) {
        directMembersInTable(offsets, regionOf(c, c.map), {})},
       {"pipeline::RelocalizerConfig", memberCount<pl::RelocalizerConfig>(),
        directMembersInTable(offsets, regionOf(c, c.relocalization), {})},
+      {"pipeline::GroundScaleConfig", memberCount<pl::GroundScaleConfig>(),
+       directMembersInTable(offsets, regionOf(c, c.ground), {regionOf(c, c.ground.plane)}) + 1},
+      {"geometry::GroundPlaneConfig", memberCount<vitamin_e::geometry::GroundPlaneConfig>(),
+       directMembersInTable(offsets, regionOf(c, c.ground.plane), {})},
       {"fusion::DenseMapperConfig", memberCount<vitamin_e::fusion::DenseMapperConfig>(),
        directMembersInTable(offsets, regionOf(c, c.dense), dense_parts) + dense_parts.size()},
       {"meshing::FrameMesherConfig (dense mesher)", memberCount<vitamin_e::meshing::FrameMesherConfig>(),

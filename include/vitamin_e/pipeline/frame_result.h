@@ -67,6 +67,12 @@ struct FrameDiagnostics {
   std::string relocalization;
   int relocalization_matches = 0;  // descriptor matches with the best keyframe
   int relocalization_inliers = 0;  // P3P inliers among them
+  // ground scale (ground.enabled, at keyframes): the camera's height above the road plane
+  // (map units, before this frame's correction; 0: no plane found), its road points, and the
+  // factor the map was scaled by about the camera (1: unchanged)
+  double ground_height = 0.0;
+  int ground_inliers = 0;
+  double scale_correction = 1.0;
 
   // prev_map_tracked / prev_map_points (1 when there were none)
   double prevMapTrackedFraction() const {

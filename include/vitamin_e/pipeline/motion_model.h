@@ -10,6 +10,7 @@ class MotionModel {
   // The last pose moved once more by the last relative motion.
   Eigen::Isometry3d predict() const { return T_w_last_ * T_prev_last_; }
   const Eigen::Isometry3d& lastPose() const { return T_w_last_; }
+  double lastStepLength() const { return T_prev_last_.translation().norm(); }  // map units
   // A new pose: the motion from the previous one becomes the velocity.
   void update(const Eigen::Isometry3d& T_w_c) {
     T_prev_last_ = T_w_last_.inverse() * T_w_c;
@@ -24,6 +25,8 @@ class MotionModel {
     valid_ = true;
   }
   void invalidate() { valid_ = false; }
+  // The map was rescaled about the last pose's centre: the velocity's step follows.
+  void rescale(double factor) { T_prev_last_.translation() *= factor; }
 
  private:
   bool valid_ = false;

@@ -9,6 +9,7 @@
 #include "vitamin_e/geometry/two_view.h"
 #include "vitamin_e/map/map.h"
 #include "vitamin_e/optimization/subspace_gn.h"
+#include "vitamin_e/pipeline/ground_scale.h"
 #include "vitamin_e/pipeline/relocalizer.h"
 #include "vitamin_e/tracking/dense_tracker.h"
 
@@ -26,6 +27,7 @@ struct SystemConfig {
   optimization::BaOptions ba;                   // yaml section "ba"
   map::MapConfig map;                           // yaml section "map"
   RelocalizerConfig relocalization;             // yaml section "relocalization"
+  GroundScaleConfig ground;                     // yaml section "ground"
   // Dense reconstruction (yaml section "dense"): run by the offline runner and
   // the ROS meshing nodelet on the system's per-frame points, not by System.
   bool dense_enabled = true;

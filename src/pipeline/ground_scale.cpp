@@ -1,0 +1,66 @@
+#include "vitamin_e/pipeline/ground_scale.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace vitamin_e::pipeline {
+
+void GroundScaleConfig::validate() const {
+  plane.validate();
+  if (reference_keyframes < 1) throw std::invalid_argument("ground.reference_keyframes: must be >= 1");
+  if (!(max_step_height_ratio > 0.0)) throw std::invalid_argument("ground.max_step_height_ratio: must be > 0");
+  if (window < 1) throw std::invalid_argument("ground.window: must be >= 1");
+  if (!(tolerance >= 0.0 && tolerance < 1.0)) throw std::invalid_argument("ground.tolerance: must be in [0, 1)");
+  if (!(gain > 0.0 && gain <= 1.0)) throw std::invalid_argument("ground.gain: must be in (0, 1]");
+  if (!(max_change > 0.0 && max_change < 1.0)) throw std::invalid_argument("ground.max_change: must be in (0, 1)");
+}
+
+GroundScale::GroundScale(const GroundScaleConfig& config) : config_(config) {}
+
+void GroundScale::reset() {
+  first_heights_.clear();
+  recent_.clear();
+  reference_ = 0.0;
+}
+
+namespace {
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+}  // namespace
+
+ScaleCorrection GroundScale::update(const std::vector<Eigen::Vector3d>& points_c, double step) {
+  ScaleCorrection c;
+  if (!config_.enabled) return c;
+  const geometry::GroundPlane plane = geometry::fitGroundPlane(points_c, config_.plane);
+  c.inliers = plane.inliers;
+  c.reference = reference_;
+  if (!plane.valid) return c;
+  if (step > config_.max_step_height_ratio * plane.height) return c;
+  c.measured = true;
+  c.height = plane.height;
+  if (reference_ <= 0.0) {
+    first_heights_.push_back(plane.height);
+    if (static_cast<int>(first_heights_.size()) >= config_.reference_keyframes) {
+      reference_ = median(first_heights_);
+      c.reference = reference_;
+    }
+    return c;
+  }
+  // Compared with the map's current height, not the reference: the map may have drifted further.
+  const double current = recent_.empty() ? reference_ : median(recent_);
+  if (std::abs(current / plane.height - 1.0) > config_.max_change) return c;  // a kerb, a car roof: not the road
+  recent_.push_back(plane.height);
+  if (static_cast<int>(recent_.size()) > config_.window) recent_.erase(recent_.begin());
+  if (static_cast<int>(recent_.size()) < config_.window) return c;
+  const double error = reference_ / median(recent_) - 1.0;
+  if (std::abs(error) <= config_.tolerance) return c;
+  const double beyond = error > 0.0 ? error - config_.tolerance : error + config_.tolerance;
+  c.factor = 1.0 + config_.gain * beyond;
+  for (double& h : recent_) h *= c.factor;  // the map they measured was rescaled
+  return c;
+}
+
+}  // namespace vitamin_e::pipeline

@@ -1,0 +1,125 @@
+// pipeline::GroundScale: a map whose scale drifts is held to the height of its
+// first keyframes above the road; noise within the tolerance, planes that are
+// not the road and fast frames change nothing.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "vitamin_e/pipeline/ground_scale.h"
+
+using vitamin_e::pipeline::GroundScale;
+using vitamin_e::pipeline::GroundScaleConfig;
+using vitamin_e::pipeline::ScaleCorrection;
+
+namespace {
+
+// Road points `height` below a level camera (camera frame, y down), with facade points.
+std::vector<Eigen::Vector3d> roadAt(double height, int seed = 1) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 300; ++i) pts.push_back({height * (8.0 * u(rng) - 4.0), height, height * (2.0 + 8.0 * u(rng))});
+  for (int i = 0; i < 200; ++i)
+    pts.push_back({height * (i % 2 ? 5.0 : -5.0), height * (1.0 - 5.0 * u(rng)), height * (2.0 + 20.0 * u(rng))});
+  return pts;
+}
+
+GroundScaleConfig enabled() {
+  GroundScaleConfig c;
+  c.enabled = true;
+  return c;
+}
+
+}  // namespace
+
+TEST(GroundScale, DriftingMapIsHeldToItsFirstHeight) {
+  // The map's scale grows 1.5 % per keyframe (a turn); the camera is 1.65 m high.
+  GroundScale ground(enabled());
+  double map_scale = 1.0;  // map units per metre
+  double worst = 0.0;
+  for (int k = 0; k < 60; ++k) {
+    const ScaleCorrection c = ground.update(roadAt(1.65 * map_scale, k), 0.1 * map_scale);
+    ASSERT_TRUE(c.measured) << k;
+    EXPECT_NEAR(c.height, 1.65 * map_scale, 0.01 * 1.65 * map_scale) << k;
+    map_scale *= c.factor;  // the system rescales the map
+    if (k >= 3) worst = std::max(worst, std::abs(map_scale - 1.0));
+    map_scale *= 1.015;  // the drift until the next keyframe
+  }
+  // Without the correction the scale would be 1.015^60 = 2.4 x. Held, it stays within
+  // the tolerance, plus the drift the gain leaves each keyframe (drift / gain) and the
+  // drift of the keyframes the median lags behind (about a window).
+  const GroundScaleConfig c = enabled();
+  const double bound = c.tolerance + 0.015 * (1.0 / c.gain + c.window);
+  EXPECT_LT(worst, bound);
+  EXPECT_NEAR(map_scale, 1.0, bound);
+}
+
+TEST(GroundScale, NoiseWithinTheToleranceChangesNothing) {
+  GroundScale ground(enabled());
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> noise(-0.015, 0.015);  // reference and median differ by < 0.05
+  for (int k = 0; k < 50; ++k) {
+    const ScaleCorrection c = ground.update(roadAt(2.0 * (1.0 + noise(rng)), k), 0.1);
+    EXPECT_TRUE(c.measured);
+    EXPECT_EQ(c.factor, 1.0) << k;
+  }
+}
+
+TEST(GroundScale, ReferenceIsTheMedianOfTheFirstKeyframes) {
+  GroundScale ground(enabled());
+  EXPECT_EQ(ground.update(roadAt(1.0), 0.1).reference, 0.0);
+  EXPECT_EQ(ground.update(roadAt(1.2), 0.1).reference, 0.0);
+  const ScaleCorrection c = ground.update(roadAt(1.1), 0.1);
+  EXPECT_NEAR(c.reference, 1.1, 0.01);
+  EXPECT_EQ(c.factor, 1.0);
+}
+
+TEST(GroundScale, OtherPlanesFastFramesAndNoRoadAreIgnored) {
+  GroundScale ground(enabled());
+  for (int k = 0; k < 3; ++k) ground.update(roadAt(1.0, k), 0.1);
+  // A plane 30 % off the map's height (a car roof, a kerb) is not the road.
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(ground.update(roadAt(0.7, k), 0.1).factor, 1.0);
+  // Moving more than max_step_height_ratio x the height per frame: no measurement.
+  const ScaleCorrection fast = ground.update(roadAt(1.08), 0.9);
+  EXPECT_FALSE(fast.measured);
+  EXPECT_EQ(fast.factor, 1.0);
+  // Facades only.
+  std::vector<Eigen::Vector3d> walls;
+  for (const auto& p : roadAt(1.0)) {
+    if (std::abs(p.y() - 1.0) > 1e-9) walls.push_back(p);
+  }
+  EXPECT_FALSE(ground.update(walls, 0.1).measured);
+}
+
+TEST(GroundScale, DisabledOrResetKeepsNoState) {
+  GroundScale off{GroundScaleConfig{}};
+  const ScaleCorrection c = off.update(roadAt(1.0), 0.1);
+  EXPECT_FALSE(c.measured);
+  EXPECT_EQ(c.factor, 1.0);
+
+  GroundScale ground(enabled());
+  for (int k = 0; k < 6; ++k) ground.update(roadAt(1.0, k), 0.1);
+  ground.reset();  // a new map with its own scale: 2.0 is its reference, not a drift
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(ground.update(roadAt(2.0, k), 0.1).factor, 1.0) << k;
+}
+
+TEST(GroundScale, BadConfigIsRefusedByName) {
+  GroundScaleConfig c = enabled();
+  c.gain = 0.0;
+  EXPECT_THROW(c.validate(), std::invalid_argument);
+  c = enabled();
+  c.window = 0;
+  try {
+    c.validate();
+    FAIL() << "window 0 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("ground.window"), std::string::npos);
+  }
+}
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
