@@ -225,7 +225,18 @@ void System::Impl::reinitialize(const std::string& why, FrameResult* result) {
   result->message = "lost: " + why + "; re-initializing";
 }
 
-void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
+void System::Impl::relocalizeAtLoss(FrameContext& frame, FrameResult* result) {
+  const std::string loss = result->message;  // "lost: WHY; relocalizing"
+  relocalize(frame, result, false);
+  if (state == TrackingState::kTracking) {
+    result->message = loss.substr(0, loss.rfind("; ")) + "; " + result->message;
+    return;
+  }
+  result->state = TrackingState::kLost;
+  result->message = loss;
+}
+
+void System::Impl::relocalize(FrameContext& frame, FrameResult* result, bool count_the_wait) {
   ScopedTimer timer(&timings, "relocalize");
   result->state = TrackingState::kRelocalizing;
   const Relocalization r = relocalizer.relocalize(frame.image, frame, map);
@@ -241,6 +252,7 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
                       (r.quarter_turns == 2 ? ", camera upside down" : "") + ")";
     return;
   }
+  if (!count_the_wait) return;  // the loss frame itself: the wait starts after it
   // Frames too poor to initialize on (black, covered) do not use up the wait.
   if (static_cast<int>(frame.tracks.size()) >= config.min_init_tracks) ++lost_frames;
   if (lost_frames >= config.relocalization.max_frames && !keepRelocalizing()) {
@@ -321,6 +333,9 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
     pose_timer.stop();
     if (!pose.ok) {
       lose(frame, pose.why, true, result);
+      // The frame that lost the camera is looked for in the map at once: when it
+      // is found there, no frame goes without a pose.
+      if (state == TrackingState::kRelocalizing) relocalizeAtLoss(frame, result);
       return;
     }
     // Localized: new tracks where old map points project take them over.

@@ -47,7 +47,9 @@ struct System::Impl {
   void track(FrameContext& frame, const EndedTracks& ended, FrameResult* result);
   void lose(const FrameContext& frame, const std::string& why, bool restart_from_frame, FrameResult* result);
   void reinitialize(const std::string& why, FrameResult* result);
-  void relocalize(FrameContext& frame, FrameResult* result);
+  // count_the_wait: a failure counts towards relocalization.max_frames (not on the loss frame).
+  void relocalize(FrameContext& frame, FrameResult* result, bool count_the_wait = true);
+  void relocalizeAtLoss(FrameContext& frame, FrameResult* result);
   bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   // At a keyframe: the road plane under the camera measures the map's scale

@@ -369,6 +369,33 @@ TEST(Robustness, BlackoutOfTwoSecondsRelocalizesInTheSameMap) {
   expectSaneOutput(run, 0.3);
 }
 
+TEST(Robustness, AJumpBackInTheStreamIsRelocalizedOnItsFirstFrame) {
+  // The stream jumps 5 s back along the path (a bag spliced, a replayed
+  // buffer): the tracks cannot follow, but the place is in the map. The frame
+  // of the jump is relocalized itself, so no frame goes without a pose.
+  const World& w = world();
+  SlamRun run;
+  const int jump = 140, back = 100, end = 170;
+  for (int i = 0; i < end; ++i) run.feed(w.frame(i < jump ? i : i - back), frameTime(i));
+  const int first = run.firstValid();
+  ASSERT_GE(first, 0) << describe(run);
+  ASSERT_LT(first, jump - back) << describe(run);
+  const FrameResult& at = run.results[jump];
+  EXPECT_TRUE(at.pose_valid) << at.message;
+  EXPECT_EQ(at.state, TrackingState::kTracking) << at.message;
+  EXPECT_NE(at.message.find("lost: "), std::string::npos) << at.message;
+  EXPECT_NE(at.message.find("relocalized against keyframe"), std::string::npos) << at.message;
+  EXPECT_EQ(at.diagnostics.relocalization, "relocalized");
+  EXPECT_EQ(run.system.initRetries(), 0);
+  EXPECT_EQ(run.system.relocalizations(), 1);
+  for (int i = first; i < end; ++i) EXPECT_TRUE(run.results[i].pose_valid) << "frame " << i;
+  // The same place as 5 s before: within 5 % of the way driven since.
+  const Eigen::Vector3d then = run.results[jump - back].T_w_c.translation();
+  const double driven = (run.results[jump - 1].T_w_c.translation() - then).norm();
+  EXPECT_LT((at.T_w_c.translation() - then).norm(), 0.05 * driven);
+  expectSaneOutput(run, 0.3, frameTime(jump));  // the jump itself is the one long step
+}
+
 TEST(Robustness, BlackoutWithoutRelocalizationReinitializes) {
   // relocalization.enabled false: the old behaviour, a new map placed at the
   // last pose and scale; the trajectory goes on without NaN or jump.
