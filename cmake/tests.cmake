@@ -21,6 +21,8 @@ if(CATKIN_ENABLE_TESTING)
   endforeach()
   # ./scripts/results.sh on a made-up suite output (no data, seconds).
   add_test(NAME script_results COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_results.sh)
+  # ./scripts/step_ratio.py on made-up trajectories (seconds).
+  add_test(NAME script_step_ratio COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_step_ratio.sh)
   # Tests of the offline tools and the ROS layer (test/ros/*.test, test/tools/*.cpp).
   if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/cmake/ros_tests.cmake)
     include(cmake/ros_tests.cmake)
