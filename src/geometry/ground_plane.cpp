@@ -29,12 +29,10 @@ struct Plane {
   double d;
 };
 
-bool planeThrough(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, Plane* p) {
-  Eigen::Vector3d n = (b - a).cross(c - a);
-  const double len = n.norm();
-  if (!(len > 1e-12)) return false;
-  n /= len;
-  double d = n.dot(a);
+// The plane with unit normal n through `point`, oriented so that the camera centre
+// (the origin) is on its negative side; false when the plane passes through it.
+bool orientedPlane(Eigen::Vector3d n, const Eigen::Vector3d& point, Plane* p) {
+  double d = n.dot(point);
   if (d < 0.0) {
     n = -n;
     d = -d;
@@ -43,6 +41,13 @@ bool planeThrough(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eige
   p->n = n;
   p->d = d;
   return true;
+}
+
+bool planeThrough(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, Plane* p) {
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double len = n.norm();
+  if (!(len > 1e-12)) return false;
+  return orientedPlane(n / len, a, p);
 }
 
 // Least-squares plane through the points (smallest eigenvector of their scatter).
@@ -55,16 +60,7 @@ bool fitPlane(const std::vector<Eigen::Vector3d>& pts, Plane* p) {
   for (const auto& q : pts) scatter += (q - mean) * (q - mean).transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
   if (eig.info() != Eigen::Success) return false;
-  Eigen::Vector3d n = eig.eigenvectors().col(0);
-  double d = n.dot(mean);
-  if (d < 0.0) {
-    n = -n;
-    d = -d;
-  }
-  if (!(d > 0.0)) return false;
-  p->n = n;
-  p->d = d;
-  return true;
+  return orientedPlane(eig.eigenvectors().col(0), mean, p);
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 #include "vitamin_e/pipeline/ground_scale.h"
 
-#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include "vitamin_e/common/timing.h"
 
 namespace vitamin_e::pipeline {
 
@@ -24,13 +25,6 @@ void GroundScale::reset() {
   reference_ = 0.0;
 }
 
-namespace {
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
-}  // namespace
-
 ScaleCorrection GroundScale::update(const std::vector<Eigen::Vector3d>& points_c, double step) {
   ScaleCorrection c;
   if (!config_.enabled) return c;
@@ -44,18 +38,18 @@ ScaleCorrection GroundScale::update(const std::vector<Eigen::Vector3d>& points_c
   if (reference_ <= 0.0) {
     first_heights_.push_back(plane.height);
     if (static_cast<int>(first_heights_.size()) >= config_.reference_keyframes) {
-      reference_ = median(first_heights_);
+      reference_ = upperMedian(first_heights_);
       c.reference = reference_;
     }
     return c;
   }
   // Compared with the map's current height, not the reference: the map may have drifted further.
-  const double current = recent_.empty() ? reference_ : median(recent_);
+  const double current = recent_.empty() ? reference_ : upperMedian(recent_);
   if (std::abs(current / plane.height - 1.0) > config_.max_change) return c;  // a kerb, a car roof: not the road
   recent_.push_back(plane.height);
   if (static_cast<int>(recent_.size()) > config_.window) recent_.erase(recent_.begin());
   if (static_cast<int>(recent_.size()) < config_.window) return c;
-  const double error = reference_ / median(recent_) - 1.0;
+  const double error = reference_ / upperMedian(recent_) - 1.0;
   if (std::abs(error) <= config_.tolerance) return c;
   const double beyond = error > 0.0 ? error - config_.tolerance : error + config_.tolerance;
   c.factor = 1.0 + config_.gain * beyond;
