@@ -68,6 +68,8 @@ fmt() { "$py" -c 'import sys
 v = sys.argv[1]; s = float(sys.argv[2]); d = int(sys.argv[3])
 print(("%%.%df" % d) % (float(v) * s) if v not in ("", "None") else "n/a")' "$1" "$2" "$3"; }
 
+pct() { "$py" -c 'import sys; v = sys.argv[1]; print("%.2g" % float(v) if v not in ("", "None") else "n/a")' "$1"; }
+
 rows=()
 while read -r name dataset gt sensor rest; do
   [ -z "${name:-}" ] && continue
@@ -90,7 +92,7 @@ while read -r name dataset gt sensor rest; do
   if [ ! -e "$dataset" ]; then
     ve_info "== $name: $dataset does not exist: not run"
     echo "$dataset" >"$run/missing.txt"
-    rows+=("| $name | n/a | not run: $dataset does not exist | | | | | | |")
+    rows+=("| $name | n/a | not run: $dataset does not exist | | | | | | | | |")
     continue
   fi
   ve_info "== $name: $dataset"
@@ -104,7 +106,7 @@ while read -r name dataset gt sensor rest; do
   stats_success="$(json_get "$run/stats.json" success_rate)"
   after_init="$(json_get "$run/stats.json" success_after_init)"
   rss="$(json_get "$run/stats.json" peak_rss_mb)"
-  ate="" success="$stats_success" note=""
+  ate="" ate_percent="" path="" success="$stats_success" note=""
   if [ "$run_rc" -ne 0 ]; then
     note="run failed (exit $run_rc, log: $run/run.log)"
   elif [ -z "${gt:-}" ]; then
@@ -115,6 +117,8 @@ while read -r name dataset gt sensor rest; do
     [ -n "${sensor:-}" ] && eval_args+=(--body-to-camera "$sensor")
     if json="$("$VE_ROOT/scripts/evaluate.sh" "${eval_args[@]}" 2>"$run/evaluate.err" | tee "$run/evaluate.txt" | tail -n 1)"; then
       ate="$(echo "$json" | json_line_get ate_rmse_m)"
+      ate_percent="$(echo "$json" | json_line_get ate_path_percent)"
+      path="$(echo "$json" | json_line_get path_length_m)"
       # Success as in the paper: tracked frames / all frames (stats.json); the
       # evaluator's matched poses / frames only when the run did not report it.
       [ -n "$success" ] || success="$(echo "$json" | json_line_get success_rate)"
@@ -129,12 +133,12 @@ while read -r name dataset gt sensor rest; do
   if [ -z "$note" ] && [ -n "$success" ] && "$py" -c 'import sys; sys.exit(0 if float(sys.argv[1]) < 0.9 else 1)' "$success"; then
     ate_cell="fail ($ate_cell cm over $(fmt "$success" 100 1) % of frames)"
   fi
-  rows+=("| $name | ${frames:-n/a} | $ate_cell | $(fmt "$success" 100 1) | $(fmt "$after_init" 100 1) | ${retries:-n/a} | ${relocs:-n/a} | $(fmt "$ms" 1 1) | $(fmt "$rss" 1 0) |")
+  rows+=("| $name | ${frames:-n/a} | $ate_cell | $(pct "$ate_percent") | $(fmt "$path" 1 1) | $(fmt "$success" 100 1) | $(fmt "$after_init" 100 1) | ${retries:-n/a} | ${relocs:-n/a} | $(fmt "$ms" 1 1) | $(fmt "$rss" 1 0) |")
 done <"$list"
 
 {
-  echo "| sequence | frames | ATE [cm] | success [%] | after init [%] | init retries | relocalizations | ms/frame | peak RSS [MB] |"
-  echo "|---|---|---|---|---|---|---|---|---|"
+  echo "| sequence | frames | ATE [cm] | ATE [% of path] | path [m] | success [%] | after init [%] | init retries | relocalizations | ms/frame | peak RSS [MB] |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|"
   for r in "${rows[@]}"; do echo "$r"; done
 } | tee "$out/results.md"
 ve_suite_info_end "$out"

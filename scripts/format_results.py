@@ -132,6 +132,8 @@ def sequence_row(suite_dir, name, dataset):
         return r
     ev = last_json_line(os.path.join(run, "evaluate.txt"))
     r["ate"] = ev.get("ate_rmse_m") if ev else None
+    r["ate_percent"] = ev.get("ate_path_percent") if ev else None
+    r["path"] = ev.get("path_length_m") if ev else None
     if r["success"] is None and ev:
         r["success"] = ev.get("success_rate")
     if r["ate"] is None:
@@ -144,6 +146,11 @@ def sequence_row(suite_dir, name, dataset):
     return r
 
 
+def percent(v):
+    """A share of the path, to two significant digits (renders reach thousandths of a per cent)."""
+    return "n/a" if v is None else "%.2g" % float(v)
+
+
 def ate_cell(r):
     if r["status"] != "ok":
         return r["status"]
@@ -154,15 +161,16 @@ def ate_cell(r):
 
 
 def table(rows):
-    out = ["| sequence | frames | ATE [cm] | tracked [%] | tracked after init [%] | init retries "
-           "| relocalizations | SLAM ms/frame | peak RSS [MB] | load |",
-           "|---|---|---|---|---|---|---|---|---|---|"]
+    out = ["| sequence | frames | ATE [cm] | ATE [% of path] | path [m] | tracked [%] | tracked after init [%] "
+           "| init retries | relocalizations | SLAM ms/frame | peak RSS [MB] | load |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if r["status"] != "ok" and "frames" not in r:
-            out.append("| %s | | %s | | | | | | | |" % (r["name"], r["status"]))
+            out.append("| %s | | %s | | | | | | | | | |" % (r["name"], r["status"]))
             continue
-        out.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+        out.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
             r["name"], r["frames"] if r["frames"] is not None else "n/a", ate_cell(r),
+            percent(r.get("ate_percent")) if r["status"] == "ok" else "", fmt(r.get("path"), 1, 1),
             fmt(r["success"], 100, 1),
             "n/a (map loaded)" if r.get("loaded_map") else fmt(r["after_init"], 100, 1),
             "n/a" if r["retries"] is None else r["retries"],
@@ -175,7 +183,10 @@ def short_cell(r):
     """vitamin_e's result in one cell (README and peers tables)."""
     if r["status"] != "ok":
         return r["status"]
-    s = "%s cm, %s %% of frames" % (fmt(r["ate"], 100, 2), fmt(r["success"], 100, 1))
+    s = "%s cm" % fmt(r["ate"], 100, 2)
+    if r.get("ate_percent") is not None:
+        s += " (%s %% of the path)" % percent(r["ate_percent"])
+    s += ", %s %% of frames" % fmt(r["success"], 100, 1)
     if r["success"] is not None and r["success"] < FAIL_BELOW:
         s = "fail: " + s
     def count(n, word):
@@ -200,6 +211,10 @@ def summary(rows):
     def count(n, word):
         return "%d %s%s" % (n, word, "" if n == 1 else "s")
     s = "%d of %d sequences, ATE %s cm" % (len(ok), len(rows), span([r["ate"] for r in ok], 100, 2))
+    percents = [r["ate_percent"] for r in ok if r.get("ate_percent") is not None]
+    if len(percents) == len(ok):
+        lo, hi = percent(min(percents)), percent(max(percents))
+        s += " (%s %% of the path)" % (lo if lo == hi else lo + "-" + hi)
     after = [r["after_init"] for r in ok if r["after_init"] is not None and not r.get("loaded_map")]
     if after:
         s += ", %s %% of frames tracked after initialization" % span(after, 100, 1)
@@ -297,7 +312,8 @@ def main():
            "OUT/NAME/trajectory.txt GROUNDTRUTH --frames N`.",
            "",
            "Columns: ATE = RMSE of the camera positions after a Sim(3) (Umeyama) alignment of the "
-           "whole trajectory to ground truth; tracked = tracked frames / all frames (the paper's "
+           "whole trajectory to ground truth, also as a share of the path the ground truth travels "
+           "(path); tracked = tracked frames / all frames (the paper's "
            "success rate; under 90 % is a failure, as in the paper); tracked after init = from the "
            "first initialization on; init retries = new maps after a loss (a new scale); "
            "relocalizations = losses recovered in the existing map; SLAM ms/frame = mean of "

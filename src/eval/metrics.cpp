@@ -102,6 +102,7 @@ EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, 
   for (std::size_t k = 0; k < r.matched; ++k)
     r.errors[k] = (r.alignment.apply(Eigen::Vector3d(src.col(k))) - dst.col(k)).norm();
   r.ate = errorStats(r.errors);
+  for (std::size_t k = 1; k < r.matched; ++k) r.path_length_m += (dst.col(k) - dst.col(k - 1)).norm();
 
   r.aligned = estimate;
   for (auto& sp : r.aligned) sp.T_w_c = r.alignment.apply(sp.T_w_c);
@@ -138,7 +139,9 @@ std::string toJson(const EvalResult& r, const EvalConfig& config) {
                 "\"matched\":%zu,\"frames\":%zu,\"success_rate\":%.6f,\"scale\":%.6f,",
                 r.ate.rmse, r.ate.mean, r.ate.median, r.ate.max, r.matched, r.frames, r.success_rate,
                 r.alignment.scale);
-  o << buf << "\"rpe_trans_rmse_m\":" << jsonNumber(r.rpe_frame.rmse, r.rpe_frame)
+  o << buf << "\"path_length_m\":" << jsonNumber(r.path_length_m, r.ate)
+    << ",\"ate_path_percent\":" << jsonNumber(r.path_length_m > 0.0 ? 100.0 * r.ate.rmse / r.path_length_m : 0.0, r.ate)
+    << ",\"rpe_trans_rmse_m\":" << jsonNumber(r.rpe_frame.rmse, r.rpe_frame)
     << ",\"rpe_delta_trans_rmse_m\":" << jsonNumber(r.rpe_delta.rmse, r.rpe_delta);
   std::snprintf(buf, sizeof(buf),
                 ",\"rpe_delta_s\":%.3f,\"alignment\":\"%s\",\"estimate_poses\":%zu,\"ground_truth_poses\":%zu}",
@@ -166,6 +169,11 @@ std::string summary(const EvalResult& r, const EvalConfig& config) {
   std::snprintf(buf, sizeof(buf), "ATE [cm]: rmse %.3f  mean %.3f  median %.3f  max %.3f\n", 100.0 * r.ate.rmse,
                 100.0 * r.ate.mean, 100.0 * r.ate.median, 100.0 * r.ate.max);
   o << buf;
+  if (r.path_length_m > 0.0) {
+    std::snprintf(buf, sizeof(buf), "ATE: %.3f %% of the %.1f m path\n", 100.0 * r.ate.rmse / r.path_length_m,
+                  r.path_length_m);
+    o << buf;
+  }
   std::snprintf(buf, sizeof(buf), "RPE trans [cm]: 1 frame rmse %.3f (%zu pairs), %.2f s rmse %.3f (%zu pairs)\n",
                 100.0 * r.rpe_frame.rmse, r.rpe_frame.count, config.rpe_delta_s, 100.0 * r.rpe_delta.rmse,
                 r.rpe_delta.count);

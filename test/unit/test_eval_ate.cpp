@@ -336,6 +336,28 @@ TEST(Evaluate, RelativeErrorIsScaleFreeAndSeesAJump) {
   EXPECT_DOUBLE_EQ(ve::evaluate(est, gt, se3).alignment.scale, 1.0);
 }
 
+TEST(Evaluate, PathLengthIsTheGroundTruthsOverTheMatchedPoses) {
+  // A straight line at 1 m per pose; the estimate misses the last 5 poses.
+  ve::Trajectory gt, est;
+  for (int i = 0; i < 20; ++i) {
+    ve::StampedPose p;
+    p.t = 0.1 * i;
+    p.T_w_c.translation() = Eigen::Vector3d(double(i), 0.0, 0.0);
+    gt.push_back(p);
+    if (i < 15) {
+      p.T_w_c.translation() = Eigen::Vector3d(0.5 * i, 0.1 * (i % 2), 0.0);
+      est.push_back(p);
+    }
+  }
+  const ve::EvalResult r = ve::evaluate(est, gt);
+  EXPECT_NEAR(r.path_length_m, 14.0, 1e-9);
+  const std::string json = ve::toJson(r, ve::EvalConfig{});
+  char expected[64];
+  std::snprintf(expected, sizeof(expected), "\"ate_path_percent\":%.6f", 100.0 * r.ate.rmse / 14.0);
+  EXPECT_NE(json.find(expected), std::string::npos) << json;
+  EXPECT_NE(json.find("\"path_length_m\":14.000000"), std::string::npos) << json;
+}
+
 TEST(Evaluate, AGivenAlignmentIsAppliedUnchanged) {
   // A second run in the first run's map: the first run's alignment holds for
   // it; a second run in a frame of its own is caught (it would not be if the

@@ -38,6 +38,7 @@ struct EvalResult {
   double success_rate = 0.0;   // matched / frames
   Sim3 alignment;              // estimate -> ground truth
   ErrorStats ate;              // position error after alignment [m]
+  double path_length_m = 0.0;  // distance the ground truth travels over the matched poses [m]
   ErrorStats rpe_frame;        // translational RPE over 1 matched frame [m]
   ErrorStats rpe_delta;        // translational RPE over rpe_delta_s [m]
   Association pairs;           // (estimate index, ground-truth index)
@@ -50,6 +51,7 @@ struct EvalResult {
 EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, const EvalConfig& config = {});
 
 // One JSON object (one line): ate_rmse_m, ate_mean_m, ate_median_m, ate_max_m,
+// ate_path_percent (ATE RMSE / path_length_m), path_length_m,
 // matched, frames, success_rate, scale, rpe_trans_rmse_m (1 frame),
 // rpe_delta_trans_rmse_m, rpe_delta_s, estimate_poses, ground_truth_poses.
 std::string toJson(const EvalResult& result, const EvalConfig& config);
