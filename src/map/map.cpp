@@ -9,7 +9,6 @@ namespace vitamin_e::map {
 
 void MapConfig::validate() const {
   if (max_keyframes < 2) throw std::invalid_argument("map.max_keyframes must be >= 2");
-  if (!(keyframe_spread_ratio >= 0.0)) throw std::invalid_argument("map.keyframe_spread_ratio must be >= 0");
   if (keep_newest_keyframes < 1) throw std::invalid_argument("map.keep_newest_keyframes must be >= 1");
   if (!(archive_voxel_m >= 0.0)) throw std::invalid_argument("map.archive_voxel_m must be >= 0");
   if (min_observations_to_archive < 1) throw std::invalid_argument("map.min_observations_to_archive must be >= 1");
@@ -123,19 +122,60 @@ const Keyframe& Map::addKeyframe(Keyframe keyframe) {
   return keyframes_.back();
 }
 
+namespace {
+// The widest angle [rad] between two of the rays, leaving ray `skip` out (-1: none); 0 with fewer than two.
+double widestAngle(const std::vector<Eigen::Vector3d>& rays, int skip, int* first = nullptr, int* second = nullptr) {
+  double min_dot = 2.0;
+  const int n = static_cast<int>(rays.size());
+  for (int i = 0; i < n; ++i) {
+    if (i == skip) continue;
+    for (int j = i + 1; j < n; ++j) {
+      if (j == skip) continue;
+      const double d = rays[i].dot(rays[j]);
+      if (d < min_dot) {
+        min_dot = d;
+        if (first) *first = i;
+        if (second) *second = j;
+      }
+    }
+  }
+  return min_dot > 1.5 ? 0.0 : std::acos(std::clamp(min_dot, -1.0, 1.0));
+}
+}  // namespace
+
 std::size_t Map::keyframeToRetire() const {
   const int n = static_cast<int>(keyframes_.size());
-  if (!(config_.keyframe_spread_ratio > 0.0) || n < 3) return 0;
-  auto centre = [&](int k) { return keyframes_[static_cast<std::size_t>(k)].T_w_c.translation(); };
-  const double oldest_gap = (centre(1) - centre(0)).norm();
-  int best = 0;
-  double best_gap = config_.keyframe_spread_ratio * oldest_gap;
-  for (int k = 1; k + config_.keep_newest_keyframes < n; ++k) {
-    const double gap = (centre(k + 1) - centre(k - 1)).norm();
-    if (gap < best_gap) {
-      best_gap = gap;
-      best = k;
+  const int candidates = n - config_.keep_newest_keyframes;
+  if (candidates <= 1) return 0;
+  std::unordered_map<std::uint64_t, int> index_of;
+  for (int k = 0; k < n; ++k) index_of.emplace(keyframes_[static_cast<std::size_t>(k)].frame_index, k);
+  // Per keyframe, the parallax the points of the newest keyframe would lose without it:
+  // for each point, its widest angle between two observing keyframes' rays, with and
+  // without the keyframe (only the two keyframes of the widest pair can lose any).
+  std::vector<double> loss(static_cast<std::size_t>(n), 0.0);
+  std::vector<Eigen::Vector3d> rays;
+  std::vector<int> observer;
+  for (const auto& obs : keyframes_.back().observations) {
+    const Landmark* l = landmark(obs.first);
+    if (!l || l->observations.size() < 2) continue;
+    rays.clear();
+    observer.clear();
+    for (const LandmarkObservation& o : l->observations) {
+      auto it = index_of.find(o.keyframe);
+      if (it == index_of.end()) continue;
+      const Keyframe& kf = keyframes_[static_cast<std::size_t>(it->second)];
+      rays.push_back((kf.T_w_c.rotation() * o.xy.homogeneous()).normalized());
+      observer.push_back(it->second);
     }
+    int a = -1, b = -1;
+    const double widest = widestAngle(rays, -1, &a, &b);
+    if (a < 0) continue;
+    for (int e : {a, b}) loss[static_cast<std::size_t>(observer[e])] += widest - widestAngle(rays, e);
+  }
+  // The cheapest; among equals (none of them sees the current points) the oldest.
+  int best = 0;
+  for (int k = 1; k < candidates; ++k) {
+    if (loss[static_cast<std::size_t>(k)] < loss[static_cast<std::size_t>(best)]) best = k;
   }
   return static_cast<std::size_t>(best);
 }

@@ -167,10 +167,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.section("map");
   auto& m = c.map;
   t.key("max_keyframes", &m.max_keyframes, "keyframes in the active window (>= 2)");
-  t.key("keyframe_spread_ratio", &m.keyframe_spread_ratio,
-        "a full window retires a middle keyframe whose neighbours are closer than this x the oldest gap "
-        "(0 = always the oldest)");
-  t.key("keep_newest_keyframes", &m.keep_newest_keyframes, "newest keyframes keyframe_spread_ratio never retires");
+  t.key("keep_newest_keyframes", &m.keep_newest_keyframes,
+        "a full window retires the keyframe whose removal costs the current points least parallax, never one of "
+        "the newest this many (>= 1)");
   t.key("archive_voxel_m", &m.archive_voxel_m,
         "retired points archived: 0 = all, else one per voxel of this size (map units)");
   t.key("max_archive_points", &m.max_archive_points,

@@ -242,44 +242,73 @@ std::vector<std::uint64_t> windowFrames(const Map& map) {
   for (const Keyframe& kf : map.keyframes()) f.push_back(kf.frame_index);
   return f;
 }
+
+// A keyframe at camera centre c (no rotation: looking along +z) that observes the
+// given landmarks by projection.
+Keyframe keyframeObserving(std::uint64_t frame, const Eigen::Vector3d& c,
+                           const std::vector<std::pair<std::uint64_t, Eigen::Vector3d>>& points) {
+  Keyframe kf;
+  kf.frame_index = frame;
+  kf.T_w_c.translation() = c;
+  for (const auto& p : points) {
+    const Eigen::Vector3d p_c = p.second - c;
+    if (p_c.z() > 0.1) kf.observations.emplace(p.first, p_c.hnormalized());
+  }
+  return kf;
+}
 }  // namespace
 
-TEST(Map, EvenlySpacedKeyframesLeaveOldestFirst) {
-  MapConfig cfg;
-  cfg.max_keyframes = 4;
-  cfg.keyframe_spread_ratio = 1.5;  // merging two 1 m gaps (2 m) is wider than 1.5 x the oldest gap
-  Map map(cfg);
-  for (std::uint64_t k = 0; k < 6; ++k) map.addKeyframe(keyframeAt(k, double(k)));
-  EXPECT_EQ(windowFrames(map), (std::vector<std::uint64_t>{2, 3, 4, 5}));
-}
-
-TEST(Map, CrowdedKeyframesDoNotPushOutTheWiderSpacedOnes) {
+TEST(Map, ATurnRetiresACrowdedKeyframeNotTheWideOne) {
+  // Keyframes 1 m apart, then a turn that makes a keyframe every 2 cm: every keyframe
+  // sees the same points ahead. The oldest keyframe gives them their widest parallax;
+  // a crowded one between its neighbours gives them nothing the others do not.
   MapConfig cfg;
   cfg.max_keyframes = 5;
-  cfg.keyframe_spread_ratio = 1.5;
-  cfg.keep_newest_keyframes = 2;
   Map map(cfg);
-  // 1 m apart, then a turn on the spot: 5 cm apart.
-  map.addKeyframe(keyframeAt(0, 0.0));
-  map.addKeyframe(keyframeAt(1, 1.0));
-  map.addKeyframe(keyframeAt(2, 2.0));
-  for (std::uint64_t k = 3; k < 9; ++k) {
-    map.addLandmark(newLandmark(1000 * k, Eigen::Vector3d(0, 0, 5), 1, k));  // seen by keyframe k only
-    map.addKeyframe(keyframeAt(k, 2.0 + 0.05 * double(k - 2)));
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> points;
+  for (std::uint64_t i = 0; i < 40; ++i) {
+    points.emplace_back(i, Eigen::Vector3d(-2.0 + 0.1 * double(i), 0.5 * double(i % 3) - 0.5, 8.0));
+  }
+  for (const auto& p : points) map.addLandmark(newLandmark(p.first, p.second, 1));
+  map.addKeyframe(keyframeObserving(0, Eigen::Vector3d(0, 0, 0), points));
+  map.addKeyframe(keyframeObserving(1, Eigen::Vector3d(1, 0, 0), points));
+  for (std::uint64_t k = 2; k < 8; ++k) {
+    map.addKeyframe(keyframeObserving(k, Eigen::Vector3d(1.0 + 0.02 * double(k - 1), 0, 0), points));
   }
   const std::vector<std::uint64_t> f = windowFrames(map);
   ASSERT_EQ(f.size(), 5u);
-  // The oldest (1 m gaps) stay; crowded ones in the middle left; the newest two are kept.
-  EXPECT_EQ(f[0], 0u);
-  EXPECT_EQ(f[1], 1u);
-  EXPECT_EQ(f[3], 7u);
-  EXPECT_EQ(f[4], 8u);
-  // The landmark only a retired middle keyframe saw, no longer tracked, left with it.
-  EXPECT_EQ(map.landmark(3000), nullptr);
-  EXPECT_NE(map.landmark(8000), nullptr);
+  EXPECT_EQ(f[0], 0u);  // the wide baseline stays (retiring the oldest would have dropped it first)
+  EXPECT_EQ(f[2], 5u);  // the newest three are kept
+  EXPECT_EQ(f[4], 7u);
 }
 
-TEST(Map, SpreadRatioZeroAlwaysRetiresTheOldest) {
+TEST(Map, AtSpeedTheKeyframesThatSeeNoCurrentPointLeaveFirst) {
+  // Driving fast and slowing down: the gaps between keyframes shrink from 8 m to 1 m,
+  // and each point is seen only from the keyframes of the last few metres. The old,
+  // widely spaced keyframes see none of the current points: they leave, oldest first,
+  // instead of holding the window while the keyframes that see the current points go.
+  MapConfig cfg;
+  cfg.max_keyframes = 5;
+  Map map(cfg);
+  const std::vector<double> centres = {0, 8, 15, 21, 26, 30, 33, 35, 36};
+  std::uint64_t next_id = 0;
+  for (std::size_t k = 0; k < centres.size(); ++k) {
+    // Points 6-9 m ahead of this keyframe: seen by the keyframes within about 5 m of it.
+    for (int i = 0; i < 20; ++i) {
+      const Eigen::Vector3d p(-1.0 + 0.1 * i, 0.3 * (i % 4), centres[k] + 6.0 + 0.15 * i);
+      map.addLandmark(newLandmark(next_id++, p, 1, k));
+    }
+    // The new keyframe sees its own points and those of the keyframes close behind it.
+    std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> visible;
+    for (const auto& kv : map.landmarks()) {
+      if (kv.second.p_w.z() - centres[k] < 10.0) visible.emplace_back(kv.first, kv.second.p_w);
+    }
+    map.addKeyframe(keyframeObserving(k, Eigen::Vector3d(0, 0, centres[k]), visible));
+  }
+  EXPECT_EQ(windowFrames(map), (std::vector<std::uint64_t>{4, 5, 6, 7, 8}));
+}
+
+TEST(Map, KeyframesThatSeeNoPointLeaveOldestFirst) {
   MapConfig cfg;
   cfg.max_keyframes = 3;
   Map map(cfg);

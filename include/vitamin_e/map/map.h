@@ -82,14 +82,12 @@ struct MapSnapshot {
 };
 
 struct MapConfig {
-  int max_keyframes = 8;  // keyframes kept in the active window
-  // Which keyframe leaves a full window. 0: the oldest. > 0: a middle one when
-  // removing it leaves a gap between its neighbours (camera centres) shorter than
-  // this x the oldest gap: keyframes crowded along a short stretch (a turn makes
-  // one per frame) then do not push the older, wider-spaced ones out, and the
-  // window keeps its baseline. Protects the newest keep_newest_keyframes.
-  double keyframe_spread_ratio = 0.0;
-  int keep_newest_keyframes = 3;  // never chosen by keyframe_spread_ratio (>= 1)
+  int max_keyframes = 10;  // keyframes kept in the active window
+  // A full window retires the keyframe whose removal costs the newest keyframe's points
+  // least parallax (the widest angle between two rays of the keyframes observing a point):
+  // one that sees none of them (left behind at speed) or one crowded between its
+  // neighbours (a turn makes a keyframe per frame). The newest keep_newest_keyframes stay.
+  int keep_newest_keyframes = 3;  // >= 1
   double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
@@ -138,8 +136,8 @@ class Map {
   int flagOutlier(std::uint64_t id);
 
   // Adds a keyframe (its observations are attached to the existing landmarks);
-  // retires one beyond max_keyframes (the oldest, or a crowded middle one: see
-  // keyframe_spread_ratio). Landmarks that no active keyframe observes any more
+  // retires one beyond max_keyframes (which one: MapConfig::keep_newest_keyframes).
+  // Landmarks that no active keyframe observes any more
   // and that were not seen since the retired keyframe's successor are archived
   // (if well observed) and removed.
   const Keyframe& addKeyframe(Keyframe keyframe);
@@ -172,7 +170,7 @@ class Map {
 
  private:
   void retireKeyframe(const Keyframe& keyframe, std::uint64_t next_keyframe);  // frame index of its successor
-  std::size_t keyframeToRetire() const;           // index into keyframes_ (see MapConfig::keyframe_spread_ratio)
+  std::size_t keyframeToRetire() const;           // index into keyframes_ (see MapConfig::keep_newest_keyframes)
   void retireLandmark(const Landmark& landmark);  // to the archive and the dormant landmarks
   void archive(const Landmark& landmark);
   void coarsenArchive();
