@@ -122,7 +122,7 @@ TEST(TwoView, RecoversRelativePoseUpToScale) {
   EXPECT_LT(rotationAngle(r.T_c1_c0.linear(), T_c1_c0.linear()) * 180 / M_PI, 0.1);
   const double dir_err =
       std::acos(std::min(1.0, r.T_c1_c0.translation().normalized().dot(T_c1_c0.translation().normalized())));
-  EXPECT_LT(dir_err * 180 / M_PI, 1.0);
+  EXPECT_LT(dir_err * 180 / M_PI, 0.35);  // the refined direction (measured 0.23 deg)
   EXPECT_GT(r.median_parallax_deg, cfg.min_parallax_deg);
   EXPECT_GE(r.num_inliers, 250);
   // Scale convention: median depth of the valid points is 1; points match truth up to scale.
