@@ -12,6 +12,8 @@
 #include "vitamin_e/geometry/projection.h"
 #include "vitamin_e/geometry/triangulation.h"
 
+#include "two_view_detail.h"
+
 namespace vitamin_e {
 namespace geometry {
 
@@ -60,18 +62,9 @@ double median(std::vector<double> v) {
   return v[m];
 }
 
-// Sampson distance (normalized units) of x1^T E x0 and its squared denominator.
-double sampson(const Eigen::Matrix3d& E, const Eigen::Vector3d& x0, const Eigen::Vector3d& x1, double* denom) {
-  const Eigen::Vector3d Ex0 = E * x0;
-  const Eigen::Vector3d Etx1 = E.transpose() * x1;
-  *denom = std::sqrt(std::max(Ex0.head<2>().squaredNorm() + Etx1.head<2>().squaredNorm(), 1e-30));
-  return x1.dot(Ex0) / *denom;
-}
-
 // Refines (R, t) with |t| = 1 (5 DoF: R <- R expSO3(w), t <- normalize(t + B d)) on the Sampson
 // distance with Geman-McClure IRLS. The denominator is frozen within an iteration, so the
-// Jacobian of the epipolar residual x1^T [t]x R x0 is analytic:
-//   d/dw = -x1^T [t]x R [x0]x,   d/dt = ((R x0) x x1)^T.
+// Jacobian of the epipolar residual x1^T [t]x R x0 is analytic (detail::sampsonJacobian).
 void refineRelativePose(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
                         const std::vector<bool>& mask, double focal, double sigma_px, int iterations,
                         Eigen::Matrix3d* R, Eigen::Vector3d* t) {
@@ -80,27 +73,24 @@ void refineRelativePose(const std::vector<Eigen::Vector2d>& xy0, const std::vect
     const Eigen::Matrix3d E = skew(tc) * Rc;
     double c = 0.0, d;
     for (size_t i = 0; i < xy0.size(); ++i)
-      if (mask[i]) c += kernel.rho(std::pow(focal * sampson(E, xy0[i].homogeneous(), xy1[i].homogeneous(), &d), 2));
+      if (mask[i])
+        c += kernel.rho(std::pow(focal * detail::sampson(E, xy0[i].homogeneous(), xy1[i].homogeneous(), &d), 2));
     return c;
   };
   double cost = cost_of(*R, *t);
   double lambda = 1e-6;
   for (int it = 0; it < iterations; ++it) {
     const Eigen::Matrix3d E = skew(*t) * *R;
-    Eigen::Matrix<double, 3, 2> B;
-    B.col(0) = t->unitOrthogonal();
-    B.col(1) = t->cross(B.col(0));
+    const Eigen::Matrix<double, 3, 2> B = detail::tangentBasis(*t);
     Eigen::Matrix<double, 5, 5> H = Eigen::Matrix<double, 5, 5>::Zero();
     Eigen::Matrix<double, 5, 1> g = Eigen::Matrix<double, 5, 1>::Zero();
     for (size_t i = 0; i < xy0.size(); ++i) {
       if (!mask[i]) continue;
       const Eigen::Vector3d x0 = xy0[i].homogeneous(), x1 = xy1[i].homogeneous();
       double d;
-      const double r = focal * sampson(E, x0, x1, &d);
+      const double r = focal * detail::sampson(E, x0, x1, &d);
       const double s = focal / d;
-      Eigen::Matrix<double, 1, 5> J;
-      J.leftCols<3>() = -s * x1.transpose() * skew(*t) * *R * skew(x0);
-      J.rightCols<2>() = s * ((*R * x0).cross(x1)).transpose() * B;
+      const Eigen::Matrix<double, 1, 5> J = detail::sampsonJacobian(*R, *t, B, x0, x1, s);
       const double w = kernel.weight(r * r);
       H.noalias() += w * J.transpose() * J;
       g.noalias() += w * J.transpose() * r;
@@ -259,7 +249,7 @@ TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const s
     std::vector<bool> sel(n, false);
     for (int i = 0; i < n; ++i) {
       double d;
-      sel[i] = std::abs(sampson(Ecur, xy0[i].homogeneous(), xy1[i].homogeneous(), &d)) * config.focal_px <
+      sel[i] = std::abs(detail::sampson(Ecur, xy0[i].homogeneous(), xy1[i].homogeneous(), &d)) * config.focal_px <
                2.0 * config.ransac_threshold_px;
     }
     refineRelativePose(xy0, xy1, sel, config.focal_px, config.ransac_threshold_px, 10, &R, &t);

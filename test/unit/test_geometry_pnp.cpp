@@ -48,8 +48,10 @@ TEST(Pnp, RansacRecoversPoseWith30PercentOutliers) {
   const PnpResult r = solvePnpRansac(s.p_w, s.xy, cfg);
   ASSERT_TRUE(r.ok) << r.reason;
   EXPECT_FALSE(r.used_guess);
-  EXPECT_LT(poseErrorT(r.T_w_c, s.T_w_c), 0.02);
-  EXPECT_LT(rotationAngle(r.T_w_c.linear(), s.T_w_c.linear()) * 180 / M_PI, 0.2);
+  // The refinement on the inliers, not just the best minimal sample: measured 1.2 mm, 0.0094 deg at
+  // 0.5 px noise.
+  EXPECT_LT(poseErrorT(r.T_w_c, s.T_w_c), 0.002);
+  EXPECT_LT(rotationAngle(r.T_w_c.linear(), s.T_w_c.linear()) * 180 / M_PI, 0.015);
   // Inliers classified correctly (outliers are >= 20 px off).
   int wrong = 0;
   for (size_t i = 0; i < s.outlier.size(); ++i) wrong += (r.inliers[i] == s.outlier[i]);
@@ -72,13 +74,14 @@ TEST(Pnp, GoodGuessIsRefinedDirectlyBadGuessFallsBackToRansac) {
   PnpResult r = solvePnpRansac(s.p_w, s.xy, cfg, &guess);
   ASSERT_TRUE(r.ok) << r.reason;
   EXPECT_TRUE(r.used_guess);
-  EXPECT_LT(poseErrorT(r.T_w_c, s.T_w_c), 0.02);
+  // Both ways end at the refined pose: measured 2.2 mm each.
+  EXPECT_LT(poseErrorT(r.T_w_c, s.T_w_c), 0.0035);
 
   guess = s.T_w_c * expSE3((Vector6d() << 1.0, 0.5, 0.0, 0.3, 0.0, 0.2).finished());
   r = solvePnpRansac(s.p_w, s.xy, cfg, &guess);
   ASSERT_TRUE(r.ok) << r.reason;
   EXPECT_FALSE(r.used_guess);
-  EXPECT_LT(poseErrorT(r.T_w_c, s.T_w_c), 0.02);
+  EXPECT_LT(poseErrorT(r.T_w_c, s.T_w_c), 0.0035);
 }
 
 TEST(Pnp, RefusesTooFewPointsAndPureNoise) {

@@ -153,7 +153,8 @@ void expectAllLocalizedAfter(const TripRun& run, int first) {
 
 TEST(SystemMapPersistence, FirstRunMapsTheTrip) {
   const FirstRun& r = firstRun();
-  EXPECT_LT(r.eval.ate.rmse, 0.005) << ve::eval::summary(r.eval, {});  // measured 0.136 cm, 77 keyframes
+  // Measured 0.136 cm, 77 keyframes: the map the later runs are scored against is that good.
+  EXPECT_LT(r.eval.ate.rmse, 0.0021) << ve::eval::summary(r.eval, {});
   EXPECT_GT(r.keyframes, 10u);
   ASSERT_TRUE(fs::exists(r.map_path));
 }
@@ -206,7 +207,8 @@ TEST(SystemMapPersistence, ExtendModeAddsKeyframesAndItsMapRoundTrips) {
   expectAllLocalizedAfter(run, 10);
   EXPECT_EQ(system.initRetries(), 0);
   const ve::eval::EvalResult e = withFirstRunAlignment(run);
-  EXPECT_LT(e.ate.rmse, 0.01) << ve::eval::summary(e, {});  // measured 0.13 cm
+  // Measured 0.13 cm: extending does not degrade the loaded map's frame and scale.
+  EXPECT_LT(e.ate.rmse, 0.002) << ve::eval::summary(e, {});
 
   // The new keyframes join the map after the loaded ones.
   const ve::map::MapFileContents extended = system.exportMap();
