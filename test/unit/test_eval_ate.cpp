@@ -101,7 +101,8 @@ double angleBetween(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
 class TempDir {
  public:
   TempDir() {
-    path_ = fs::temp_directory_path() / ("ve_eval_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
+    path_ =
+        fs::temp_directory_path() / ("ve_eval_" + std::to_string(::getpid()) + "_" + std::to_string(instance_count++));
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
@@ -109,7 +110,7 @@ class TempDir {
 
  private:
   fs::path path_;
-  static inline int counter_ = 0;
+  static inline int instance_count = 0;
 };
 
 void writeEurocCsv(const std::string& path, const ve::Trajectory& traj, long long t0_ns, long long dt_ns) {
