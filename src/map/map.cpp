@@ -146,7 +146,7 @@ double widestAngle(const std::vector<Eigen::Vector3d>& rays, int skip, int* firs
 std::size_t Map::keyframeToRetire() const {
   const int n = static_cast<int>(keyframes_.size());
   const int candidates = n - config_.keep_newest_keyframes;
-  if (candidates <= 1) return 0;
+  if (!config_.retire_least_parallax || candidates <= 1) return 0;
   std::unordered_map<std::uint64_t, int> index_of;
   for (int k = 0; k < n; ++k) index_of.emplace(keyframes_[static_cast<std::size_t>(k)].frame_index, k);
   // Per keyframe, the parallax the points of the newest keyframe would lose without it:

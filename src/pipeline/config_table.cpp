@@ -170,6 +170,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("keep_newest_keyframes", &m.keep_newest_keyframes,
         "a full window retires the keyframe whose removal costs the current points least parallax, never one of "
         "the newest this many (>= 1)");
+  t.key("retire_least_parallax", &m.retire_least_parallax,
+        "true: a full window retires the keyframe whose removal costs the current points least parallax; "
+        "false: the oldest");
   t.key("archive_voxel_m", &m.archive_voxel_m,
         "retired points archived: 0 = all, else one per voxel of this size (map units)");
   t.key("max_archive_points", &m.max_archive_points,

@@ -88,7 +88,10 @@ struct MapConfig {
   // one that sees none of them (left behind at speed) or one crowded between its
   // neighbours (a turn makes a keyframe per frame). The newest keep_newest_keyframes stay.
   int keep_newest_keyframes = 3;  // >= 1
-  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
+  // false: the oldest keyframe leaves (euroc.yaml: on a drone's whole render the parallax rule
+  // cost accuracy, docs/ROBUSTNESS.md).
+  bool retire_least_parallax = true;
+  double archive_voxel_m = 0.0;  // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
   // re-thins the archive to at most half the cap.
