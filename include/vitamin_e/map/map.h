@@ -83,15 +83,14 @@ struct MapSnapshot {
 
 struct MapConfig {
   int max_keyframes = 10;  // keyframes kept in the active window
-  // A full window retires the keyframe whose removal costs the newest keyframe's points
-  // least parallax (the widest angle between two rays of the keyframes observing a point):
-  // one that sees none of them (left behind at speed) or one crowded between its
-  // neighbours (a turn makes a keyframe per frame). The newest keep_newest_keyframes stay.
-  int keep_newest_keyframes = 3;  // >= 1
-  // false: the oldest keyframe leaves (euroc.yaml: on a drone's whole render the parallax rule
-  // cost accuracy, docs/ROBUSTNESS.md).
+  // true: a full window retires the keyframe whose removal costs the newest keyframe's points
+  // least parallax (the widest angle between two rays of the keyframes observing a point): one
+  // that sees none of them (left behind at speed) or one crowded between its neighbours (a turn
+  // makes a keyframe per frame); never one of the newest keep_newest_keyframes. false: the
+  // oldest leaves (euroc.yaml: on a drone's whole render the parallax rule cost accuracy).
   bool retire_least_parallax = true;
-  double archive_voxel_m = 0.0;  // 0: archive every retired landmark; >0: one per voxel (map units)
+  int keep_newest_keyframes = 3;  // >= 1
+  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
   // re-thins the archive to at most half the cap.
@@ -139,7 +138,7 @@ class Map {
   int flagOutlier(std::uint64_t id);
 
   // Adds a keyframe (its observations are attached to the existing landmarks);
-  // retires one beyond max_keyframes (which one: MapConfig::keep_newest_keyframes).
+  // retires one beyond max_keyframes (which one: MapConfig::retire_least_parallax).
   // Landmarks that no active keyframe observes any more
   // and that were not seen since the retired keyframe's successor are archived
   // (if well observed) and removed.
@@ -173,7 +172,7 @@ class Map {
 
  private:
   void retireKeyframe(const Keyframe& keyframe, std::uint64_t next_keyframe);  // frame index of its successor
-  std::size_t keyframeToRetire() const;           // index into keyframes_ (see MapConfig::keep_newest_keyframes)
+  std::size_t keyframeToRetire() const;           // index into keyframes_ (see MapConfig::retire_least_parallax)
   void retireLandmark(const Landmark& landmark);  // to the archive and the dormant landmarks
   void archive(const Landmark& landmark);
   void coarsenArchive();
