@@ -1,6 +1,6 @@
 // vitamin_e_run: runs VITAMIN-E SLAM offline over a dataset, as fast as possible.
 //   vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]
-//                 [--max-frames N] [--start-frame N] [--quiet] [--check]
+//                 [--max-frames N] [--start-frame N] [--stride N] [--quiet] [--check]
 //                 [--load-map FILE [--localization-only]] [--save-map FILE]
 //                 [--load-tsdf FILE] [--save-tsdf FILE]
 // PATH: EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder, KITTI odometry
@@ -42,7 +42,7 @@ namespace {
 
 const char* const kUsage =
     "usage: vitamin_e_run --dataset PATH --out DIR [--config YAML] [--calib FILE] [--topic T]\n"
-    "                     [--max-frames N] [--start-frame N] [--quiet] [--check]\n"
+    "                     [--max-frames N] [--start-frame N] [--stride N] [--quiet] [--check]\n"
     "                     [--load-map FILE [--localization-only]] [--save-map FILE]\n"
     "                     [--load-tsdf FILE] [--save-tsdf FILE]\n"
     "  --dataset PATH   EuRoC ASL folder (top, mav0/ or mav0/cam0/), TUM folder (rgb.txt),\n"
@@ -52,8 +52,10 @@ const char* const kUsage =
     "  --calib FILE     calibration (EuRoC sensor.yaml, Kalibr camchain, ROS camera_info yaml,\n"
     "                   KITTI calib.txt); required for bags and TUM folders without camera.yaml\n"
     "  --topic T        image topic of a bag (default /cam0/image_raw)\n"
-    "  --max-frames N   process at most N frames\n"
+    "  --max-frames N   process at most N frames (with --stride: frames start .. start+N-1 of the input)\n"
     "  --start-frame N  skip the first N frames\n"
+    "  --stride N       process every Nth frame only (default 1): a camera that drops frames, or a\n"
+    "                   slower frame rate, with the same images\n"
     "  --quiet          no progress and no summary\n"
     "  --pipelined      tracking and mapping on two threads (frame k+1 is tracked while k is mapped);\n"
     "                   default: sequential, deterministic\n"
@@ -170,6 +172,7 @@ struct Options {
   std::string dataset, out, config, calib, topic = "/cam0/image_raw";
   std::size_t max_frames = 0;  // 0 = all
   std::size_t start_frame = 0;
+  std::size_t stride = 1;
   bool quiet = false;
   bool check = false;
   bool print_config = false;
@@ -236,6 +239,7 @@ Options parseArgs(int argc, char** argv) {
     else if (a == "--topic") o.topic = v;
     else if (a == "--max-frames") o.max_frames = parseCount(a, v);
     else if (a == "--start-frame") o.start_frame = parseCount(a, v);
+    else if (a == "--stride") o.stride = parseCount(a, v);
     else if (a == "--load-map") o.load_map = v;
     else if (a == "--save-map") o.save_map = v;
     else if (a == "--load-tsdf") o.load_tsdf = v;
@@ -245,6 +249,7 @@ Options parseArgs(int argc, char** argv) {
   if (o.print_config || o.print_reference) return o;
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
   if (o.out.empty() && !o.check) fail("--out DIR is required (see --help)");
+  if (o.stride == 0) fail("--stride needs a positive integer (1 = every frame)");
   if (o.localization_only && o.load_map.empty())
     fail("--localization-only needs --load-map FILE (a map to localize in)");
   if (o.localization_only && !o.save_map.empty()) {
@@ -358,8 +363,9 @@ int run(const Options& o) {
 
   const vitamin_e::camera::CameraCalibration& calib = dataset->calibration();
   if (!o.quiet) {
-    std::fprintf(stderr, "[vitamin_e_run] %s dataset '%s': %zu frames, processing %zu..%zu\n", dataset->kind().c_str(),
-                 o.dataset.c_str(), dataset->size(), o.start_frame, end - 1);
+    std::fprintf(stderr, "[vitamin_e_run] %s dataset '%s': %zu frames, processing %zu..%zu%s\n",
+                 dataset->kind().c_str(), o.dataset.c_str(), dataset->size(), o.start_frame, end - 1,
+                 o.stride > 1 ? (", every " + std::to_string(o.stride) + "th").c_str() : "");
     std::fprintf(stderr, "[vitamin_e_run] camera (%s): %s\n", calib.format.c_str(), calib.camera.describe().c_str());
   }
   std::unique_ptr<pl::System> sequential;
@@ -393,7 +399,9 @@ int run(const Options& o) {
   stats.config = o.config;
   stats.loaded_map = o.load_map;
   stats.localization_only = o.localization_only;
-  Progress progress(end - o.start_frame, o.quiet);
+  stats.stride = o.stride;
+  const std::size_t frames_to_process = (end - o.start_frame + o.stride - 1) / o.stride;
+  Progress progress(frames_to_process, o.quiet);
   const auto t_start = vitamin_e::TimingClock::now();
   std::size_t attempted = 0;
   // Everything done with a frame's result: stats, progress, per-frame log, dense
@@ -444,7 +452,7 @@ int run(const Options& o) {
                    o.localization_only ? " (localization only)" : "");
     }
   }
-  for (std::size_t i = o.start_frame; i < end && !g_stop; ++i) {
+  for (std::size_t i = o.start_frame; i < end && !g_stop; i += o.stride) {
     ++attempted;
     cv::Mat image;
     const auto t_load = vitamin_e::TimingClock::now();

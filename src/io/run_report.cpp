@@ -83,6 +83,7 @@ std::string toJson(const RunStats& s) {
   os << "  \"config\": " << jsonString(s.config) << ",\n";
   os << "  \"loaded_map\": " << jsonString(s.loaded_map) << ",\n";
   os << "  \"localization_only\": " << (s.localization_only ? "true" : "false") << ",\n";
+  os << "  \"stride\": " << s.stride << ",\n";
   os << "  \"frames\": " << s.frames << ",\n";
   os << "  \"tracked_frames\": " << s.tracked_frames << ",\n";
   os << "  \"success_rate\": " << number(s.successRate()) << ",\n";

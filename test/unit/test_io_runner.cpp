@@ -22,7 +22,7 @@ namespace {
 
 struct Result {
   int code = -1;
-  std::string err;
+  std::string out, err;
 };
 
 class RunnerTest : public ::testing::Test {
@@ -41,15 +41,14 @@ class RunnerTest : public ::testing::Test {
   }
 
   Result run(const std::string& args) {
+    const fs::path out = dir_ / "stdout.txt";
     const fs::path err = dir_ / "stderr.txt";
-    const std::string cmd = runner_.string() + " " + args + " </dev/null >/dev/null 2>" + err.string();
+    const std::string cmd = runner_.string() + " " + args + " </dev/null >" + out.string() + " 2>" + err.string();
     const int status = std::system(cmd.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(err);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    r.err = ss.str();
+    r.out = readText(out);
+    r.err = readText(err);
     return r;
   }
   // Exit code 2 and a single "error: ..." line containing `what`.
@@ -61,6 +60,12 @@ class RunnerTest : public ::testing::Test {
     EXPECT_NE(r.err.find(what), std::string::npos) << "'" << what << "' not in: " << r.err;
   }
 
+  static std::string readText(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
   static void write(const fs::path& p, const std::string& text) {
     fs::create_directories(p.parent_path());
     std::ofstream(p) << text;
@@ -99,6 +104,7 @@ TEST_F(RunnerTest, BadArgumentsExitWithCode2) {
   expectBadInput("--dataset " + dir_.string(), "--out");
   expectBadInput("--dataset x --out y --bogus 1", "unknown option '--bogus'");
   expectBadInput("--dataset x --out y --max-frames -3", "--max-frames");
+  expectBadInput("--dataset x --out y --stride 0", "--stride needs a positive integer");
   expectBadInput("--dataset x --out", "--out needs a value");
 }
 
@@ -184,6 +190,24 @@ TEST_F(RunnerTest, RunsASequenceAndSkipsAnUnreadableFrame) {
                         " --quiet --start-frame 6 --max-frames 3");
   ASSERT_EQ(r2.code, 0) << r2.err;
   EXPECT_EQ(YAML::LoadFile((out / "stats.json").string())["frames"].as<int>(), 3);
+
+  // --stride 2 in that range: frames 6, 8 and 10 only, in order.
+  const Result r3 = run("--dataset " + (top / "mav0").string() + " --out " + out.string() +
+                        " --quiet --log-frames --start-frame 6 --max-frames 5 --stride 2");
+  ASSERT_EQ(r3.code, 0) << r3.err;
+  const YAML::Node j3 = YAML::LoadFile((out / "stats.json").string());
+  EXPECT_EQ(j3["frames"].as<int>(), 3);
+  EXPECT_EQ(j3["stride"].as<int>(), 2);
+  std::istringstream log(r3.out);
+  std::vector<double> stamps;
+  for (std::string line; std::getline(log, line);) {
+    std::istringstream ls(line);
+    std::string index;
+    double stamp = 0.0;
+    if (ls >> index >> stamp) stamps.push_back(stamp);
+  }
+  ASSERT_EQ(stamps.size(), 3u) << r3.out;
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(stamps[k], 1403715273.562143 + 0.1 * k, 1e-5) << r3.out;
 }
 
 namespace {

@@ -17,6 +17,7 @@ struct RunStats {
   std::string loaded_map;          // map file the run started in ("" = none; with one, no initialization:
                                    // first_init_frame stays -1)
   bool localization_only = false;  // the loaded map was not changed
+  std::size_t stride = 1;          // every stride-th input frame was processed
   std::size_t frames = 0;          // frames given to the system
   std::size_t tracked_frames = 0;
   std::size_t skipped_frames = 0;      // unreadable images (warned and skipped)
