@@ -213,7 +213,7 @@ TEST_F(RunnerTest, RunsASequenceAndSkipsAnUnreadableFrame) {
 namespace {
 // Writes a bag with one uniform image per encoding, written out of stamp order,
 // plus a message on another topic. Needs Debian's python3 rosbag.
-const char* kBagWriter = R"(import struct, sys
+constexpr char kBagWriter[] = R"(import struct, sys
 import rosbag, rospy
 from sensor_msgs.msg import Image
 from std_msgs.msg import String
