@@ -36,7 +36,10 @@ build_type="Release"
 if [ ! -f "$VE_WS/build/Makefile" ] || [ ! -f "$VE_WS/build/.ve_configured_$sanitize" ]; then
   rm -rf "$VE_WS/build"
   mkdir -p "$VE_WS/build"
-  (cd "$VE_WS/build" && cmake ../src \
+  launcher=()
+  # ccache, when installed, makes rebuilds and a second checkout's build cheap.
+  if command -v ccache >/dev/null 2>&1; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+  (cd "$VE_WS/build" && cmake ../src "${launcher[@]}" \
       -DCMAKE_BUILD_TYPE="$build_type" \
       -DCATKIN_DEVEL_PREFIX="$VE_WS/devel" \
       -DCMAKE_INSTALL_PREFIX="$VE_WS/install" \
