@@ -124,9 +124,9 @@ std::string formatDiagnostics(const pl::FrameDiagnostics& d) {
                 d.keyframe_parallax_px, d.triangulated, formatCounts(d.triangulation_rejected_by).c_str(), d.candidates,
                 d.candidates_two_keyframes, d.candidate_parallax_deg, d.keyframes);
   std::string out = buf;
-  if (!d.relocalization.empty()) {
-    out += " reloc=" + d.relocalization + ":" + std::to_string(d.relocalization_inliers) + "/" +
-           std::to_string(d.relocalization_matches);
+  if (d.relocalization != pl::RelocalizationOutcome::kNotTried) {
+    out += std::string(" reloc=") + pl::toString(d.relocalization) + ":" + std::to_string(d.relocalization_inliers) +
+           "/" + std::to_string(d.relocalization_matches);
   }
   if (d.ground_height > 0.0) {
     char g[96];
@@ -162,10 +162,13 @@ void addCounters(const pl::FrameResult& r, io::RunStats* stats) {
   }
   stats->addCounter("triangulated", d.triangulated);
   for (const auto& [why, n] : d.triangulation_rejected_by) stats->addCounter("triangulation_rejected_by_" + why, n);
-  if (!d.relocalization.empty()) {
+  if (d.relocalization != pl::RelocalizationOutcome::kNotTried) {
     stats->addCounter("relocalization_attempts", 1.0);
-    stats->addCounter("relocalization_succeeded", d.relocalization == "relocalized" ? 1.0 : 0.0);
+    stats->addCounter("relocalization_succeeded",
+                      d.relocalization == pl::RelocalizationOutcome::kRelocalized ? 1.0 : 0.0);
   }
+  ++stats->frames_by_state[pl::toString(r.state)];
+  ++stats->frames_by_reason[pl::toString(r.reason)];
 }
 
 struct Options {

@@ -24,6 +24,14 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
 }
 
+// {"name": count, ...} in name order.
+std::string counts(const std::map<std::string, std::size_t>& by_name) {
+  std::string out = "{";
+  for (const auto& [name, n] : by_name)
+    out += (out.size() > 1 ? ", " : "") + jsonString(name) + ": " + std::to_string(n);
+  return out + "}";
+}
+
 std::string meanMedian(const std::vector<double>& v) {
   return "{\"mean\": " + number(mean(v)) + ", \"median\": " + number(percentile(v, 50.0)) + "}";
 }
@@ -94,6 +102,8 @@ std::string toJson(const RunStats& s) {
   os << "  \"tracked_since_init\": " << s.tracked_since_init << ",\n";
   os << "  \"reused_map_points\": " << s.reused_map_points << ",\n";
   os << "  \"success_after_init\": " << number(s.successAfterInit()) << ",\n";
+  os << "  \"frames_by_state\": " << counts(s.frames_by_state) << ",\n";
+  os << "  \"frames_by_reason\": " << counts(s.frames_by_reason) << ",\n";
   os << "  \"interrupted\": " << (s.interrupted ? "true" : "false") << ",\n";
   os << "  \"map_points\": " << s.map_points << ",\n";
   os << "  \"points_per_frame\": " << meanMedian(s.points_per_frame) << ",\n";

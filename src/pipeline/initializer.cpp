@@ -99,6 +99,8 @@ InitAttempt Initializer::addFrame(const FrameContext& frame, const MapAnchor& an
   m.reference_frame = pending_.front();
   m.between.assign(pending_.begin() + 1, pending_.end() - 1);
   m.parallax_deg = tv.median_parallax_deg;
+  m.from_homography = tv.used_homography;
+  m.ambiguous = tv.ambiguous;
   // Planar scenes (two_view.h): say where the motion came from, and say so when two views
   // could not tell two different motions apart (the map may then be built on the wrong one).
   if (tv.used_homography) {

@@ -1,4 +1,5 @@
-// Trajectory (TUM) and map (PLY) writers shared by the offline runner and ROS services.
+// Trajectory (TUM) and map (PLY) writers shared by the offline runner and ROS services, and the
+// names of the frame result's enums.
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -14,6 +15,31 @@ const char* toString(TrackingState state) {
     case TrackingState::kTracking: return "tracking";
     case TrackingState::kLost: return "lost";
     case TrackingState::kRelocalizing: return "relocalizing";
+  }
+  return "unknown";
+}
+
+const char* toString(StateReason reason) {
+  switch (reason) {
+    case StateReason::kWaitingForMap: return "waiting_for_map";
+    case StateReason::kInitialized: return "initialized";
+    case StateReason::kTracked: return "tracked";
+    case StateReason::kPoseFailed: return "pose_failed";
+    case StateReason::kPoseJumped: return "pose_jumped";
+    case StateReason::kRelocalized: return "relocalized";
+    case StateReason::kNotRelocalized: return "not_relocalized";
+    case StateReason::kRelocalizationTimedOut: return "relocalization_timed_out";
+    case StateReason::kSkipped: return "skipped";
+  }
+  return "unknown";
+}
+
+const char* toString(RelocalizationOutcome outcome) {
+  switch (outcome) {
+    case RelocalizationOutcome::kNotTried: return "";
+    case RelocalizationOutcome::kRelocalized: return "relocalized";
+    case RelocalizationOutcome::kNotFound: return "not_found";
+    case RelocalizationOutcome::kDidNotHold: return "did_not_hold";
   }
   return "unknown";
 }

@@ -42,6 +42,7 @@ System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
       mapper(config, cam),
       relocalizer(config.relocalization, cam, config.pnp),
       ground(config.ground),
+      recovery({config.relocalization.max_frames, config.min_init_tracks}),
       map(cfg.map) {}
 
 TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
@@ -53,11 +54,11 @@ TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, co
 FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   FrameResult result;
   result.timestamp = f.timestamp;
-  result.state = state;
   result.frame_index = f.frame_index - front_end.frameIndexOffset();  // this stream's own count
   result.init_retries = counters.init_retries;
   result.relocalizations = counters.relocalizations;
   if (f.skipped) {
+    setOutcome(recovery.apply(RecoveryEvent::kSkipped, {}), &result);
     result.message = std::move(f.message);
     return result;
   }
@@ -73,14 +74,11 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
   FrameContext frame = contextOf(std::move(f));
 
   const auto t_start = TimingClock::now();
-  if (state == TrackingState::kTracking) {
-    track(frame, ended, &result);
-  } else if (state == TrackingState::kRelocalizing) {
-    relocalize(frame, &result);
-  } else {
-    initialize(frame, &result);
+  switch (recovery.state()) {
+    case TrackingState::kTracking: track(frame, ended, &result); break;
+    case TrackingState::kRelocalizing: relocalize(frame, &result); break;
+    default: initialize(frame, &result);
   }
-  if (state == TrackingState::kTracking && !result.pose_valid) result.state = TrackingState::kLost;
   result.points.reserve(frame.tracks.size());
   std::size_t mapped = 0;
   prev_mapped_ids.clear();
@@ -143,9 +141,8 @@ void System::Impl::endTracks(const std::vector<std::uint64_t>& removed, FrameCon
 
 void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   ScopedTimer timer(&timings, "init");
-  state = TrackingState::kInitializing;
-  result->state = TrackingState::kInitializing;
   if (localization_only) {  // a new map would be a change of the map
+    report(RecoveryEvent::kNoMapYet, frame, result);
     result->message = "localization only: no map to localize in";
     return;
   }
@@ -158,19 +155,21 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   }
   InitAttempt attempt = initializer.addFrame(frame, anchor);
   if (!attempt.initialized) {
+    report(RecoveryEvent::kNoMapYet, frame, result);
     result->message = std::move(attempt.message);
     return;
   }
   InitialMap& m = attempt.map;
   result->diagnostics.keyframe = true;
   result->diagnostics.triangulated = static_cast<int>(m.landmarks.size());
+  result->diagnostics.init_from_homography = m.from_homography;
+  result->diagnostics.init_ambiguous = m.ambiguous;
   map.clear();
   ground.reset();  // a new map, a new scale
   for (const map::NewLandmark& l : m.landmarks) map.addLandmark(l);
   map.addKeyframe(std::move(m.reference));
   map.addKeyframe(std::move(m.current));
   map.markAllSeen(frame.frame_index);
-  state = TrackingState::kTracking;
   endTracks(mapper.optimizeWindow(&map), frame);
 
   // The reference frame and the frames in between, localized against the new map.
@@ -192,76 +191,75 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   initialized_once = true;
   frame.lookup(map);
   relocalizer.addKeyframe(frame.image, frame, T_w_c);
-  result->state = TrackingState::kTracking;
+  report(RecoveryEvent::kMapBuilt, frame, result);
   result->pose_valid = true;
   result->T_w_c = T_w_c;
   result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
                     std::to_string(m.parallax_deg) + " deg" + m.notes;
 }
 
-// Tracking failed at this frame: look for the camera in the map, or (when
-// there is nothing to relocalize against) start a new map.
-void System::Impl::lose(const FrameContext& frame, const std::string& why, bool restart_from_frame,
-                        FrameResult* result) {
-  result->state = TrackingState::kLost;
-  if ((config.relocalization.enabled && relocalizer.size() > 0) || keepRelocalizing()) {
-    state = TrackingState::kRelocalizing;
-    lost_frames = 0;
-    result->message = "lost: " + why + "; relocalizing";
-    return;
+Transition System::Impl::report(RecoveryEvent event, const FrameContext& frame, FrameResult* result) {
+  RecoveryFacts facts;
+  facts.index_available = config.relocalization.enabled && relocalizer.size() > 0;
+  facts.keep_map = keepRelocalizing();
+  facts.frame_tracks = frame.tracks.size();
+  const Transition t = recovery.apply(event, facts);
+  setOutcome(t, result);
+  if (t.action == RecoveryAction::kNewMap || t.action == RecoveryAction::kNewMapFromFrame) {
+    ++counters.init_retries;
+    map.clear();
+    relocalizer.clear();  // the new map has its own scale: the old keyframes do not fit it
+    initializer.reset();
+    if (t.action == RecoveryAction::kNewMapFromFrame) initializer.restartFrom(frame);
   }
-  reinitialize(why, result);
-  result->state = TrackingState::kLost;
-  // This frame is the reference of the next initialization.
-  if (restart_from_frame) initializer.restartFrom(frame);
+  return t;
 }
 
-void System::Impl::reinitialize(const std::string& why, FrameResult* result) {
-  ++counters.init_retries;
-  map.clear();
-  relocalizer.clear();  // the new map has its own scale: the old keyframes do not fit it
-  initializer.reset();
-  state = TrackingState::kLost;
-  result->message = "lost: " + why + "; re-initializing";
+void System::Impl::setOutcome(const Transition& t, FrameResult* result) {
+  result->state = t.frame_state;
+  result->reason = t.reason;
 }
 
-void System::Impl::relocalizeAtLoss(FrameContext& frame, FrameResult* result) {
-  const std::string loss = result->message;  // "lost: WHY; relocalizing"
-  relocalize(frame, result, false);
-  if (state == TrackingState::kTracking) {
-    result->message = loss.substr(0, loss.rfind("; ")) + "; " + result->message;
-    return;
+// Tracking failed at this frame: the camera is looked for in the map (this
+// frame at once, if Recovery says so), or a new map starts.
+void System::Impl::lose(FrameContext& frame, RecoveryEvent event, const std::string& why, FrameResult* result) {
+  const Transition t = report(event, frame, result);
+  const std::string lost = "lost: " + why;
+  if (t.action == RecoveryAction::kRelocalizeNow) {
+    const MapSearch search = searchMap(frame, result);
+    if (search.found) {
+      report(RecoveryEvent::kRelocalized, frame, result);
+      result->message = lost + "; " + search.message;
+      return;
+    }
   }
-  result->state = TrackingState::kLost;
-  result->message = loss;
+  result->message = lost + (t.state == TrackingState::kRelocalizing ? "; relocalizing" : "; re-initializing");
 }
 
-void System::Impl::relocalize(FrameContext& frame, FrameResult* result, bool count_the_wait) {
+void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
+  const MapSearch search = searchMap(frame, result);
+  const Transition t =
+      report(search.found ? RecoveryEvent::kRelocalized : RecoveryEvent::kNotRelocalized, frame, result);
+  if (t.reason == StateReason::kRelocalizationTimedOut) {
+    result->message = "lost: not relocalized in " + std::to_string(recovery.lostFrames()) + " frames; re-initializing";
+  } else {
+    result->message = (search.found ? "" : "relocalizing: ") + search.message;
+  }
+}
+
+System::Impl::MapSearch System::Impl::searchMap(FrameContext& frame, FrameResult* result) {
   ScopedTimer timer(&timings, "relocalize");
-  result->state = TrackingState::kRelocalizing;
   const Relocalization r = relocalizer.relocalize(frame.image, frame, map);
   FrameDiagnostics& d = result->diagnostics;
   d.relocalization_matches = r.matches;
   d.relocalization_inliers = r.inliers;
-  d.relocalization = r.ok ? "did_not_hold" : "not_found";
-  if (r.ok && resume(frame, r.T_w_c, result)) {
-    d.relocalization = "relocalized";
-    ++counters.relocalizations;
-    result->message = "relocalized against keyframe " + std::to_string(r.keyframe) + " (" + std::to_string(r.inliers) +
-                      " of " + std::to_string(r.matches) + " matches" +
-                      (r.quarter_turns == 2 ? ", camera upside down" : "") + ")";
-    return;
-  }
-  if (!count_the_wait) return;  // the loss frame itself: the wait starts after it
-  // Frames too poor to initialize on (black, covered) do not use up the wait.
-  if (static_cast<int>(frame.tracks.size()) >= config.min_init_tracks) ++lost_frames;
-  if (lost_frames >= config.relocalization.max_frames && !keepRelocalizing()) {
-    reinitialize("not relocalized in " + std::to_string(lost_frames) + " frames", result);
-    initializer.restartFrom(frame);
-    result->state = TrackingState::kLost;
-  } else {
-    result->message = "relocalizing: " + (r.ok ? std::string("the pose found did not hold") : r.why);
-  }
+  d.relocalization = r.ok ? RelocalizationOutcome::kDidNotHold : RelocalizationOutcome::kNotFound;
+  if (!r.ok || !resume(frame, r.T_w_c, result)) return {false, r.ok ? "the pose found did not hold" : r.why};
+  d.relocalization = RelocalizationOutcome::kRelocalized;
+  ++counters.relocalizations;
+  return {true, "relocalized against keyframe " + std::to_string(r.keyframe) + " (" + std::to_string(r.inliers) +
+                    " of " + std::to_string(r.matches) + " matches" +
+                    (r.quarter_turns == 2 ? ", camera upside down" : "") + ")"};
 }
 
 // Continues tracking from a relocalized pose: map points are handed to the
@@ -301,8 +299,6 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
     trajectory.back().T_w_c = T_w_c;
     relocalizer.addKeyframe(frame.image, frame, T_w_c);
   }
-  state = TrackingState::kTracking;
-  result->state = TrackingState::kTracking;
   result->pose_valid = true;
   result->T_w_c = T_w_c;
   return true;
@@ -332,10 +328,7 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
     }
     pose_timer.stop();
     if (!pose.ok) {
-      lose(frame, pose.why, true, result);
-      // The frame that lost the camera is looked for in the map at once: when it
-      // is found there, no frame goes without a pose.
-      if (state == TrackingState::kRelocalizing) relocalizeAtLoss(frame, result);
+      lose(frame, RecoveryEvent::kPoseFailed, pose.why, result);
       return;
     }
     // Localized: new tracks where old map points project take them over.
@@ -355,8 +348,8 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
   // is a failure, not motion.
   const double step = (T_w_c.translation() - motion.lastPose().translation()).norm();
   if (!T_w_c.matrix().allFinite() || step > config.max_step_depth_ratio * scene_depth) {
-    lose(frame, "pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")", false,
-         result);
+    lose(frame, RecoveryEvent::kPoseJumped,
+         "pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")", result);
     return;
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
@@ -385,8 +378,7 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
     }
     if (depths.size() > 20) scene_depth = std::max(1e-6, upperMedian(depths));
   }
-  state = TrackingState::kTracking;
-  result->state = TrackingState::kTracking;
+  report(RecoveryEvent::kPoseFound, frame, result);
   result->pose_valid = true;
   result->T_w_c = T_w_c;
 }
@@ -447,9 +439,8 @@ void System::Impl::reset() {
   prev_mapped_ids.clear();
   map.clear();
   relocalizer.clear();
-  lost_frames = 0;
   initializer.reset();
-  state = TrackingState::kInitializing;
+  recovery.reset();
   front_end.reset();
   motion.invalidate();
 }

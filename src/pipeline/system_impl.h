@@ -16,6 +16,7 @@
 #include "vitamin_e/pipeline/map_reuse.h"
 #include "vitamin_e/pipeline/mapper.h"
 #include "vitamin_e/pipeline/motion_model.h"
+#include "vitamin_e/pipeline/recovery.h"
 #include "vitamin_e/pipeline/relocalizer.h"
 #include "vitamin_e/pipeline/system.h"
 
@@ -45,11 +46,20 @@ struct System::Impl {
   // The steps of mapFrame (system.cpp).
   void initialize(FrameContext& frame, FrameResult* result);
   void track(FrameContext& frame, const EndedTracks& ended, FrameResult* result);
-  void lose(const FrameContext& frame, const std::string& why, bool restart_from_frame, FrameResult* result);
-  void reinitialize(const std::string& why, FrameResult* result);
-  // count_the_wait: a failure counts towards relocalization.max_frames (not on the loss frame).
-  void relocalize(FrameContext& frame, FrameResult* result, bool count_the_wait = true);
-  void relocalizeAtLoss(FrameContext& frame, FrameResult* result);
+  // A loss (kPoseFailed, kPoseJumped; why: the message's detail).
+  void lose(FrameContext& frame, RecoveryEvent event, const std::string& why, FrameResult* result);
+  // A frame of the relocalizing state.
+  void relocalize(FrameContext& frame, FrameResult* result);
+  // The frame looked for in the relocalizer's index and, when found, tracked from there.
+  struct MapSearch {
+    bool found = false;
+    std::string message;  // where it was found, or why not
+  };
+  MapSearch searchMap(FrameContext& frame, FrameResult* result);
+  // The frame's event through Recovery: its state and reason set in *result,
+  // and a new map started when the transition asks for one.
+  Transition report(RecoveryEvent event, const FrameContext& frame, FrameResult* result);
+  static void setOutcome(const Transition& t, FrameResult* result);
   bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
   // At a keyframe: the road plane under the camera measures the map's scale
@@ -73,13 +83,12 @@ struct System::Impl {
   Mapper mapper;
   Relocalizer relocalizer;
   GroundScale ground;
+  Recovery recovery;  // the tracking state
   // shared across frames (mapping thread only)
   map::Map map;
   MotionModel motion;
-  TrackingState state = TrackingState::kInitializing;
   bool initialized_once = false;
   double scene_depth = 1.0;  // median depth of the map seen from the camera, map units
-  int lost_frames = 0;       // frames with features spent relocalizing since the loss
   // map persistence (system_map_io.cpp)
   bool localization_only = false;  // the map is not changed (System::setLocalizationOnly)
   bool map_loaded = false;         // the map came from loadMap() (a loss is then never given up)

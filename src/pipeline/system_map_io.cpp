@@ -99,9 +99,8 @@ void System::loadMap(const map::MapFileContents& c) {
   s.initializer.reset();
   s.motion.invalidate();
   s.scene_depth = c.scene_depth;
-  s.lost_frames = 0;
   s.initialized_once = true;  // a later new map (extend mode, after a loss) starts at the last pose and scale
-  s.state = TrackingState::kRelocalizing;
+  s.recovery.startRelocalizing();
   s.map_loaded = true;
 }
 

@@ -27,6 +27,8 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   s.addCounter("tracks_born", 30);
   s.addCounter("tracks_born", 20);
   s.addCounter("keyframe", 1);
+  s.frames_by_state = {{"initializing", 1}, {"tracking", 2}};
+  s.frames_by_reason = {{"waiting_for_map", 1}, {"initialized", 1}, {"tracked", 1}};
   s.peak_rss_mb = peakRssMb();
   EXPECT_GT(s.peak_rss_mb, 1.0);
   EXPECT_LT(s.peak_rss_mb, 1e5);
@@ -44,6 +46,10 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   EXPECT_EQ(j["reused_map_points"].as<int>(), 17);
   EXPECT_DOUBLE_EQ(j["success_after_init"].as<double>(), 0.5);  // 1 of the 2 frames from frame 1 on
   EXPECT_EQ(j["map_points"].as<int>(), 1234);
+  EXPECT_EQ(j["frames_by_state"].size(), 2u);
+  EXPECT_EQ(j["frames_by_state"]["tracking"].as<int>(), 2);
+  EXPECT_EQ(j["frames_by_reason"].size(), 3u);
+  EXPECT_EQ(j["frames_by_reason"]["waiting_for_map"].as<int>(), 1);
   EXPECT_FALSE(j["interrupted"].as<bool>());
   EXPECT_DOUBLE_EQ(j["points_per_frame"]["mean"].as<double>(), 200.0);
   EXPECT_DOUBLE_EQ(j["points_per_frame"]["median"].as<double>(), 200.0);

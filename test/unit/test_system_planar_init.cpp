@@ -88,9 +88,9 @@ void expectAccurate(std::uint64_t scene_seed) {
   ASSERT_LT(first, 30) << "no initialization within 1.5 s";
   // The homography path ran: its motion replaced the essential matrix's (the
   // twisted one at these seeds). Without it the test could pass by luck of the RANSAC.
-  const std::string& init_message = run.results[first].message;
-  EXPECT_NE(init_message.find("initialized"), std::string::npos) << init_message;
-  EXPECT_NE(init_message.find("motion from the homography"), std::string::npos) << init_message;
+  const ve::pipeline::FrameResult& init = run.results[first];
+  EXPECT_EQ(init.reason, ve::pipeline::StateReason::kInitialized) << init.message;
+  EXPECT_TRUE(init.diagnostics.init_from_homography) << init.message;
   for (std::size_t i = static_cast<std::size_t>(first); i < run.results.size(); ++i) {
     EXPECT_EQ(run.results[i].state, TrackingState::kTracking) << "frame " << i << ": " << run.results[i].message;
   }

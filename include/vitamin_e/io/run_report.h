@@ -36,6 +36,10 @@ struct RunStats {
   // Per-frame counters by name (one value per frame that has it: pipeline::FrameDiagnostics),
   // summarized in stats.json as frame_diagnostics {name: {mean, median, min, max, sum}}.
   std::map<std::string, std::vector<double>> frame_counters;
+  // Frames by their tracking state and by the reason for it (pipeline::TrackingState,
+  // pipeline::StateReason, by name: "tracking", "pose_failed", ...).
+  std::map<std::string, std::size_t> frames_by_state;
+  std::map<std::string, std::size_t> frames_by_reason;
   void addCounter(const std::string& name, double value) { frame_counters[name].push_back(value); }
 
   // Records one processed frame: its point counts and stage times (total_ms is
@@ -55,7 +59,7 @@ struct RunStats {
 // the system's stages in first-seen order, then "image_load", then "total".
 std::vector<std::string> reportStages(const StageTimings& timing);
 
-// stats.json: frames, tracked_frames, success_rate, init_retries,
+// stats.json: frames, tracked_frames, success_rate, init_retries, frames_by_state, frames_by_reason,
 // points_per_frame {mean, median}, timing_ms {stage: {mean, median, p95}}, peak_rss_mb, ...
 std::string toJson(const RunStats& stats);
 // Writes toJson(stats) to path; false (and *error) when it cannot.

@@ -16,7 +16,32 @@ enum class TrackingState {
   kRelocalizing,  // lost: looking for the camera in the existing map (no pose this frame)
 };
 
+// Why a frame is in its state: the transition that led there (pipeline::Recovery).
+enum class StateReason {
+  kWaitingForMap,           // initializing: no map yet (FrameResult::message says what is missing)
+  kInitialized,             // tracking: a map was built at this frame
+  kTracked,                 // tracking: pose from the map
+  kPoseFailed,              // lost: no pose from the tracked map points
+  kPoseJumped,              // lost: the pose moved far beyond the scene depth
+  kRelocalized,             // tracking: found again in the map (at the loss frame or later)
+  kNotRelocalized,          // relocalizing: not found in the map at this frame
+  kRelocalizationTimedOut,  // lost: not found in relocalization.max_frames frames: a new map follows
+  kSkipped,                 // not processed: the stamp did not increase (the state is the system's)
+};
+
+// A relocalizing frame's search (FrameDiagnostics::relocalization).
+enum class RelocalizationOutcome {
+  kNotTried,     // the frame was not relocalizing
+  kRelocalized,  // found, and confirmed by the map points around the pose
+  kNotFound,     // no pose from the keyframe index
+  kDidNotHold,   // a pose found, not confirmed by the map points around it
+};
+
+// Lower-case names ("tracking", "pose_failed", "not_found"; "" for kNotTried):
+// the words of logs, stats.json and the ROS status.
 const char* toString(TrackingState state);
+const char* toString(StateReason reason);
+const char* toString(RelocalizationOutcome outcome);
 
 // One densely tracked point of the current frame.
 struct FramePoint {
@@ -27,7 +52,7 @@ struct FramePoint {
   std::uint8_t intensity = 0;                     // image intensity at uv
 };
 
-// Per-frame counters of the map's life (issue 14): where tracks come from, why
+// Per-frame counters of the map's life: where tracks come from, why
 // they end, how many still carry a map point, how the pose was found and why
 // new points are (not) made. Filled by System from the values its stages
 // return; printed by vitamin_e_run --log-frames and summarized in stats.json.
@@ -49,6 +74,10 @@ struct FrameDiagnostics {
   int pose_points = 0;   // map points given to P3P + RANSAC
   int pose_inliers = 0;  // its inliers (0: not run)
   int reused = 0;        // map points taken over by new tracks (map reuse)
+  // initialization (the frame that built a map): its motion came from the homography (a planar
+  // scene), and another motion explained the two views as well (the map may be built on the wrong one)
+  bool init_from_homography = false;
+  bool init_ambiguous = false;
   // mapping
   bool keyframe = false;              // a keyframe was inserted (the first map's frame counts)
   double keyframe_parallax_px = 0.0;  // rotation-compensated median parallax to the last keyframe [px]
@@ -62,9 +91,8 @@ struct FrameDiagnostics {
   std::size_t candidates_two_keyframes = 0;  // of them seen by two or more keyframes (tried at each keyframe)
   double candidate_parallax_deg = 0.0;       // median angle between a candidate's ray in the first keyframe after
                                              // its detection and its ray in this frame (world frame): its parallax now
-  // relocalization (a frame of kRelocalizing): "" not tried, "relocalized", "not_found" (no pose from
-  // the index), "did_not_hold" (a pose found, not confirmed by the map points around it)
-  std::string relocalization;
+  // relocalization (a frame that looked for the camera in the map)
+  RelocalizationOutcome relocalization = RelocalizationOutcome::kNotTried;
   int relocalization_matches = 0;  // descriptor matches with the best keyframe
   int relocalization_inliers = 0;  // P3P inliers among them
   // ground scale (ground.enabled, at keyframes): the camera's height above the road plane
@@ -84,6 +112,7 @@ struct FrameResult {
   std::uint64_t frame_index = 0;  // 0-based index of the frame in the stream
   double timestamp = 0.0;         // seconds, as given to process()
   TrackingState state = TrackingState::kInitializing;
+  StateReason reason = StateReason::kWaitingForMap;         // why it is in that state
   bool pose_valid = false;                                  // T_w_c is meaningful (state == kTracking)
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // camera (optical) in world
   // Covariance of T_w_c from the per-frame BA (optimization::BaSummary::camera_covariance): of

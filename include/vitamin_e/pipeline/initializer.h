@@ -33,7 +33,9 @@ struct InitialMap {
   PendingFrame reference_frame;
   std::vector<PendingFrame> between;  // frames strictly between reference and current, oldest first
   double parallax_deg = 0.0;
-  std::string notes;  // planar scene / ambiguity remarks for the frame message
+  bool from_homography = false;  // planar scene: the motion came from the homography (two_view.h)
+  bool ambiguous = false;        // another motion explained the views as well (the map may be built on the wrong one)
+  std::string notes;             // planar scene / ambiguity remarks for the frame message
 };
 
 struct InitAttempt {
