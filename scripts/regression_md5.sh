@@ -9,8 +9,11 @@
 # and fast clips (config/kitti.yaml) made by BASE's vitamin_e_make_sequence (cached in
 # WORK/sequences), and the short renders V1_01_easy_30s, V1_03_difficult_20s (config/euroc.yaml,
 # under VE_RENDERS, default ../renders). Data that is missing is reported and skipped.
-# WORK (default /tmp/vitamin_e_regression) keeps the sequences; runs go to WORK/runs (deleted
-# unless --keep). Prints one line per case and exits 1 when a trajectory differs.
+# WORK (default /tmp/vitamin_e_regression) keeps the sequences and the md5 of every run, keyed by
+# the md5 of the executable, of the config and of the dataset's file list (names, sizes, times):
+# a binary is run once per case;
+# runs go to WORK/runs (deleted unless --keep). Prints one line per case and exits 1 when a
+# trajectory differs.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -37,7 +40,8 @@ shared="${VE_SHARED:-$VE_ROOT/../shared}"
 renders="${VE_RENDERS:-$VE_ROOT/../renders}"
 seqs="$work/sequences"
 runs="$work/runs"
-mkdir -p "$seqs" "$runs"
+cache="$work/md5_cache"
+mkdir -p "$seqs" "$runs" "$cache"
 
 # NAME DATASET CONFIG [make_sequence arguments: made into DATASET when it is missing]
 cases=(
@@ -60,6 +64,7 @@ selected() {
 
 md5() { md5sum "$1" | cut -c1-32; }
 poses() { grep -vc '^#' "$1" || true; }
+fingerprint() { find -L "$1" -type f -printf '%P %s %T@\n' | sort | md5sum | cut -c1-32; }
 
 echo "regression_md5: base $base_bin, new $new_bin; load $(cut -d ' ' -f 1-3 /proc/loadavg)"
 printf '%-24s %6s  %-32s  %-32s  %s\n' case poses "md5 base" "md5 new" result
@@ -79,18 +84,24 @@ for c in "${cases[@]}"; do
     continue
   fi
   mkdir -p "$runs/$name"
+  data_key="$(md5 "$VE_ROOT/$config")_$(fingerprint "$dataset")"
   for side in base new; do
     bin="$base_bin"
     [ "$side" = new ] && bin="$new_bin"
+    key="$cache/$(md5 "$bin/vitamin_e_run")_${name}_$data_key"
     out="$runs/$name/$side"
-    rm -rf "$out"
-    "$bin/vitamin_e_run" --dataset "$dataset" --config "$VE_ROOT/$config" --out "$out" --quiet \
-      >"$runs/$name/$side.log" 2>&1 || ve_die "vitamin_e_run ($side) failed on $name (log: $runs/$name/$side.log)"
+    if [ ! -f "$key" ] || [ "$keep" = 1 ]; then
+      rm -rf "$out"
+      "$bin/vitamin_e_run" --dataset "$dataset" --config "$VE_ROOT/$config" --out "$out" --quiet \
+        >"$runs/$name/$side.log" 2>&1 || ve_die "vitamin_e_run ($side) failed on $name (log: $runs/$name/$side.log)"
+      echo "$(md5 "$out/trajectory.txt") $(poses "$out/trajectory.txt")" >"$key"
+    fi
+    read -r "md5_$side" "poses_$side" <"$key"
   done
-  a="$(md5 "$runs/$name/base/trajectory.txt")" b="$(md5 "$runs/$name/new/trajectory.txt")"
+  a="$md5_base" b="$md5_new"
   result=same
   if [ "$a" != "$b" ]; then result=DIFFERENT; differ=1; fi
-  printf '%-24s %6s  %-32s  %-32s  %s\n' "$name" "$(poses "$runs/$name/new/trajectory.txt")" "$a" "$b" "$result"
+  printf '%-24s %6s  %-32s  %-32s  %s\n' "$name" "$poses_new" "$a" "$b" "$result"
 done
 [ "$keep" = 1 ] || rm -rf "$runs"
 exit "$differ"
