@@ -10,15 +10,15 @@ Localizer::Localizer(const SystemConfig& config)
       min_inlier_ratio_(config.min_pose_inlier_ratio),
       weak_max_step_ratio_(config.weak_pose_max_step_ratio) {}
 
-PoseEstimate Localizer::estimate(const FrameContext& frame, const Eigen::Isometry3d& guess,
+PoseEstimate Localizer::estimate(const FrameContext& frame, const map::Map& map, const Eigen::Isometry3d& guess,
                                  const Eigen::Isometry3d* T_w_last) const {
   std::vector<Eigen::Vector3d> p_w;
   std::vector<Eigen::Vector2d> xy;
   std::vector<std::uint64_t> ids;
-  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
-    if (const map::Landmark* l = frame.landmarks[i]) {
+  for (const FrameTrack& t : frame.tracks) {
+    if (const map::Landmark* l = map.landmark(t.id)) {
       p_w.push_back(l->p_w);
-      xy.push_back(frame.tracks[i].xy);
+      xy.push_back(t.xy);
       ids.push_back(l->id);
     }
   }

@@ -92,13 +92,14 @@ MapReuse::MapReuse(const SystemConfig& config, const camera::Camera& camera)
       dormant_per_frame_(static_cast<std::size_t>(config.reuse_dormant_per_frame)),
       camera_(camera) {}
 
-int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, double scene_depth, map::Map* map,
-                        bool all_dormant) {
+std::vector<Reassociation> MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
+                                               double scene_depth, const map::Map& map, bool all_dormant) {
   const double radius = radius_px_;
   const std::vector<FrameTrack>& tracks = frame.tracks;
-  const std::vector<const map::Landmark*>& landmarks = frame.landmarks;
   const camera::Camera& camera = camera_;
-  if (!(radius > 0.0) || tracks.empty()) return 0;
+  if (!(radius > 0.0) || tracks.empty()) return {};
+  // Per track, whether it carries a map point (the map as it is: nothing changes it here).
+  std::vector<bool> mapped(tracks.size());
   const Eigen::Isometry3d T_c_w = T_w_c.inverse();
   const camera::Pinhole& K = camera.pinhole();
   TrackGrid grid(camera.width(), camera.height(), std::max(radius, 1.0));
@@ -106,7 +107,9 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
   std::vector<Eigen::Vector2d> track_px(tracks.size());
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     track_px[i] = K.project(tracks[i].xy);
-    if (const map::Landmark* l = landmarks[i]) {
+    const map::Landmark* l = map.landmark(tracks[i].id);
+    mapped[i] = l != nullptr;
+    if (l) {
       const double z = (T_c_w * l->p_w).z();
       if (z > 0.0) depth.add(track_px[i], z);
     }
@@ -131,7 +134,7 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
       }
     });
     // The nearest track must be unmapped, of the same curvature sign, and close.
-    if (nearest < 0 || best > r2 || landmarks[nearest]) return;
+    if (nearest < 0 || best > r2 || mapped[nearest]) return;
     if (polarity != 0 && tracks[nearest].polarity != polarity) return;
     Claim& c = claims[nearest];
     if (best < c.d2) {
@@ -140,7 +143,7 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
     }
   };
   // Landmarks whose track ended: not seen in this frame (the seen ones are marked before).
-  for (const auto& kv : map->landmarks()) {
+  for (const auto& kv : map.landmarks()) {
     if (kv.second.last_seen_frame == frame.frame_index) continue;
     Claim c;
     c.landmark_id = kv.first;
@@ -148,9 +151,9 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
   }
   // Dormant landmarks, a bounded slice per frame in round robin: a new track
   // stays unmapped until the next keyframe, so it is met by several slices.
-  const auto& dormant = map->dormant();
+  const auto& dormant = map.dormant();
   const std::size_t budget = all_dormant ? dormant.size() : std::min<std::size_t>(dormant.size(), dormant_per_frame_);
-  const std::uint64_t dropped = map->dormantDropped();
+  const std::uint64_t dropped = map.dormantDropped();
   std::size_t start = dormant_cursor_ > dropped ? static_cast<std::size_t>(dormant_cursor_ - dropped) : 0;
   if (start >= dormant.size()) start = 0;
   for (std::size_t n = 0; n < budget; ++n) {
@@ -170,16 +173,21 @@ int MapReuse::associate(const FrameContext& frame, const Eigen::Isometry3d& T_w_
     auto [it, inserted] = winner.emplace(key_of(claims[i]), i);
     if (!inserted && claims[i].d2 < claims[it->second].d2) it->second = i;
   }
-  int reused = 0;
+  std::vector<Reassociation> out;
+  out.reserve(winner.size());
   for (const auto& kv : winner) {
     const Claim& c = claims[kv.second];
     const FrameTrack& t = tracks[kv.second];
-    const bool ok = c.dormant ? map->reviveDormant(c.dormant_index, t.id, frame.frame_index, t.polarity)
-                              : map->relabelLandmark(c.landmark_id, t.id, frame.frame_index, t.polarity);
-    if (ok) ++reused;
+    Reassociation r;
+    r.track_id = t.id;
+    r.track_polarity = t.polarity;
+    r.frame_index = frame.frame_index;
+    r.dormant = c.dormant;
+    r.landmark_id = c.landmark_id;
+    r.dormant_index = c.dormant_index;
+    out.push_back(r);
   }
-  total_reused_ += static_cast<std::uint64_t>(reused);
-  return reused;
+  return out;
 }
 
 }  // namespace vitamin_e::pipeline

@@ -13,35 +13,21 @@ namespace vitamin_e::pipeline {
 
 Mapper::Mapper(const SystemConfig& config, const camera::Camera& camera) : config_(config), camera_(camera) {}
 
-FrameRefinement Mapper::refineFrame(const FrameContext& frame, Eigen::Isometry3d* T_w_c, map::Map* map) const {
+FrameRefinement Mapper::refineFrame(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
+                                    const map::Map& map) const {
   return bundleAdjust(&frame, T_w_c, map);
 }
 
-std::vector<std::uint64_t> Mapper::optimizeWindow(map::Map* map) const {
-  return bundleAdjust(nullptr, nullptr, map).removed;
+MapUpdate Mapper::optimizeWindow(const map::Map& map) const {
+  return bundleAdjust(nullptr, Eigen::Isometry3d::Identity(), map).update;
 }
 
-std::vector<std::uint64_t> Mapper::penalize(const std::vector<std::uint64_t>& ids, map::Map* map) const {
-  std::vector<std::uint64_t> removed;
-  for (std::uint64_t id : ids) {
-    if (map->flagOutlier(id) >= config_.max_outlier_count) removed.push_back(id);
-  }
-  for (std::uint64_t id : removed) {
-    if (localization_only_) {
-      map->detachLandmark(id);
-    } else {
-      map->removeLandmark(id);
-    }
-  }
-  return removed;
-}
-
-// frame == null: keyframe window BA; otherwise the per-frame BA of frame at *T_w_c.
-FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3d* T_w_c, map::Map* map) const {
+FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, const Eigen::Isometry3d& T_w_c,
+                                     const map::Map& map) const {
   const bool keyframe_window = frame == nullptr;
   optimization::BaProblem problem;
   problem.K = camera_.pinhole();
-  const auto& kfs = map->keyframes();
+  const auto& kfs = map.keyframes();
   // Cameras: the window's keyframes; in per-frame mode the current frame is
   // appended as the only free camera.
   // Keyframe BA: the newest ba_free_keyframes are free, never the oldest
@@ -58,7 +44,7 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
   int current_cam = -1;
   if (!keyframe_window) {
     optimization::BaCamera c;
-    c.T_w_c = *T_w_c;
+    c.T_w_c = T_w_c;
     c.fixed = false;
     current_cam = static_cast<int>(problem.cameras.size());
     problem.cameras.push_back(c);
@@ -95,19 +81,20 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
     std::unordered_set<std::uint64_t> added;
     for (int k = first_free; k < num_kf; ++k) {
       for (const auto& obs : kfs[k].observations) {
-        const map::Landmark* l = map->landmark(obs.first);
+        const map::Landmark* l = map.landmark(obs.first);
         if (l && added.insert(obs.first).second) add_point(l, 0);
       }
     }
   } else {
     for (std::size_t i = 0; i < frame->tracks.size(); ++i) {
-      const map::Landmark* l = frame->landmarks[i];
+      const map::Landmark* l = map.landmark(frame->tracks[i].id);
       if (!l) continue;
       const int p = add_point(l, 1);
       problem.observations.push_back({current_cam, p, problem.K.project(frame->tracks[i].xy)});
     }
   }
   FrameRefinement out;
+  out.T_w_c = T_w_c;
   if (problem.points.empty()) return out;
   optimization::BaOptions options = config_.ba;
   options.max_sweeps = keyframe_window ? config_.ba_keyframe_sweeps : config_.ba_frame_sweeps;
@@ -118,31 +105,29 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, Eigen::Isometry3
     out.covariance_valid = summary.camera_covariance_valid[current_cam];
   }
 
-  // Write back (only finite results).
+  // What changed (only finite results).
+  MapUpdate& u = out.update;
   for (std::size_t k = 0; k < kfs.size(); ++k) {
-    if (problem.cameras[k].T_w_c.matrix().allFinite()) map->setKeyframePose(k, problem.cameras[k].T_w_c);
+    const optimization::BaCamera& c = problem.cameras[k];
+    if (!c.fixed && c.T_w_c.matrix().allFinite()) u.keyframe_poses.emplace_back(k, c.T_w_c);
   }
   if (current_cam >= 0 && problem.cameras[current_cam].T_w_c.matrix().allFinite()) {
-    *T_w_c = problem.cameras[current_cam].T_w_c;
+    out.T_w_c = problem.cameras[current_cam].T_w_c;
   }
-  std::vector<std::uint64_t> ids(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
-    ids[i] = points[i]->id;
     if (!problem.points[i].fixed && problem.points[i].p_w.allFinite()) {
-      map->setLandmarkPosition(ids[i], problem.points[i].p_w);
+      u.positions.emplace_back(points[i]->id, problem.points[i].p_w);
     }
   }
   // Observations far off after the optimization mark their points; repeated
-  // offenders are removed from the map and their tracks dropped.
+  // offenders leave the map and their tracks are dropped.
   std::vector<bool> bad(points.size(), false);
   for (std::size_t o = 0; o < problem.observations.size() && o < summary.residual_px.size(); ++o) {
     if (summary.residual_px[o] > config_.max_reprojection_px) bad[problem.observations[o].point] = true;
   }
-  std::vector<std::uint64_t> offenders;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (bad[i]) offenders.push_back(ids[i]);
+    if (bad[i]) u.offenders.push_back(points[i]->id);
   }
-  out.removed = penalize(offenders, map);
   return out;
 }
 
@@ -157,7 +142,7 @@ KeyframeDecision Mapper::needKeyframe(const FrameContext& frame, const Eigen::Is
   std::size_t mapped = 0;
   for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
     const FrameTrack& t = frame.tracks[i];
-    if (frame.landmarks[i]) ++mapped;
+    if (map.landmark(t.id)) ++mapped;
     auto it = kf.observations.find(t.id);
     if (it == kf.observations.end()) continue;
     const Eigen::Vector3d f = R_cur_kf * it->second.homogeneous();
@@ -180,9 +165,8 @@ TriangulationBacklog Mapper::backlog(const FrameContext& frame, const Eigen::Iso
   if (kfs.empty()) return b;
   const Eigen::Matrix3d R_w_c = T_w_c.rotation();
   std::vector<double> parallax;
-  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
-    if (frame.landmarks[i]) continue;
-    const FrameTrack& t = frame.tracks[i];
+  for (const FrameTrack& t : frame.tracks) {
+    if (map.landmark(t.id)) continue;
     // A keyframe takes every track of its frame, so a track is seen by the
     // keyframes from its detection on: start at the first keyframe not older
     // than that (they are ordered by frame) instead of asking every keyframe.
@@ -212,30 +196,22 @@ TriangulationBacklog Mapper::backlog(const FrameContext& frame, const Eigen::Iso
   return b;
 }
 
-KeyframeUpdate Mapper::addKeyframe(FrameContext* frame, const Eigen::Isometry3d& T_w_c, map::Map* map) const {
+map::Keyframe Mapper::keyframeOf(const FrameContext& frame, const Eigen::Isometry3d& T_w_c) {
   map::Keyframe kf;
-  kf.frame_index = frame->frame_index;
-  kf.timestamp = frame->timestamp;
+  kf.frame_index = frame.frame_index;
+  kf.timestamp = frame.timestamp;
   kf.T_w_c = T_w_c;
-  for (const FrameTrack& t : frame->tracks) kf.observations.emplace(t.id, t.xy);
-  map->addKeyframe(std::move(kf));
-  KeyframeUpdate out;
-  out.triangulated = triangulate(*frame, map, &out.rejected_by);
-  frame->lookup(*map);
-  out.removed = optimizeWindow(map);
-  if (!out.removed.empty()) frame->lookup(*map);
-  out.T_w_c = map->keyframes().back().T_w_c;
-  return out;
+  for (const FrameTrack& t : frame.tracks) kf.observations.emplace(t.id, t.xy);
+  return kf;
 }
 
-int Mapper::triangulate(const FrameContext& frame, map::Map* map, std::map<std::string, int>* rejected_by) const {
-  const auto& kfs = map->keyframes();
-  int created = 0;
+Triangulation Mapper::triangulate(const FrameContext& frame, const map::Map& map) const {
+  const auto& kfs = map.keyframes();
+  Triangulation out;
   std::vector<Eigen::Isometry3d> poses;
   std::vector<Eigen::Vector2d> obs;
-  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
-    const FrameTrack& t = frame.tracks[i];
-    if (frame.landmarks[i]) continue;
+  for (const FrameTrack& t : frame.tracks) {
+    if (map.landmark(t.id)) continue;
     poses.clear();
     obs.clear();
     for (const map::Keyframe& kf : kfs) {
@@ -252,7 +228,7 @@ int Mapper::triangulate(const FrameContext& frame, map::Map* map, std::map<std::
                         : !tr.cheirality_ok                                        ? "cheirality"
                         : tr.parallax_deg < config_.triangulation.min_parallax_deg ? "parallax"
                                                                                    : "reprojection";
-      ++(*rejected_by)[why];
+      ++out.rejected_by[why];
       continue;
     }
     map::NewLandmark l;
@@ -261,10 +237,9 @@ int Mapper::triangulate(const FrameContext& frame, map::Map* map, std::map<std::
     l.intensity = t.intensity;
     l.polarity = t.polarity;
     l.seen_frame = frame.frame_index;
-    map->addLandmark(l);
-    ++created;
+    out.landmarks.push_back(l);
   }
-  return created;
+  return out;
 }
 
 }  // namespace vitamin_e::pipeline

@@ -183,13 +183,18 @@ void Relocalizer::rescale(const Eigen::Vector3d& centre_w, double factor) {
   }
 }
 
-void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, const Eigen::Isometry3d& T_w_c) {
+void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, const map::Map& map,
+                              const Eigen::Isometry3d& T_w_c) {
   if (!config_.enabled || image.empty()) return;
   Entry e;
   e.frame_index = frame.frame_index;
   e.T_w_c = T_w_c;
+  std::vector<const map::Landmark*> landmarks(frame.tracks.size());
   std::vector<bool> mapped(frame.tracks.size());
-  for (std::size_t i = 0; i < frame.tracks.size(); ++i) mapped[i] = frame.landmarks[i] != nullptr;
+  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
+    landmarks[i] = map.landmark(frame.tracks[i].id);
+    mapped[i] = landmarks[i] != nullptr;
+  }
   const cv::Mat smoothed = smooth(image);
   for (std::size_t i : spread(frame, mapped, config_.points_per_keyframe)) {
     const FrameTrack& t = frame.tracks[i];
@@ -198,8 +203,8 @@ void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, c
                          &p.descriptor)) {
       continue;
     }
-    p.landmark_id = frame.landmarks[i]->id;
-    p.p_w = frame.landmarks[i]->p_w;
+    p.landmark_id = landmarks[i]->id;
+    p.p_w = landmarks[i]->p_w;
     p.polarity = t.polarity;
     e.descriptors.push_back(p.descriptor);
     e.polarities.push_back(p.polarity);

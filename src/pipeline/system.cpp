@@ -1,6 +1,8 @@
 // pipeline::System: the stages composed, and the per-frame dispatch between
 // them: initialization until there is a map, then pose, map reuse, per-frame BA
-// and keyframes.
+// and keyframes; relocalization after a loss. Stages read the map; what they
+// change comes back as values that the steps here apply (applyUpdate, the
+// keyframe and the first map), so the map is written only in this file.
 #include "vitamin_e/pipeline/system.h"
 
 #include <algorithm>
@@ -19,6 +21,19 @@ SystemConfig withCameraFocal(SystemConfig config, const camera::Camera& camera) 
   config.pnp.focal_px = focal;
   config.triangulation.focal_px = focal;
   return config;
+}
+
+// The tracker's counts of the frame into its diagnostics; the tracks it ended, by id.
+EndedTracks takeTrackerCounts(TrackedFrame* f, FrameResult* result) {
+  result->timing_ms["tracking"] = f->tracking_ms;
+  FrameDiagnostics& d = result->diagnostics;
+  d.tracks_born = f->tracks_born;
+  d.tracks_lost = f->tracks_lost;
+  d.tracks_dropped = f->tracks_dropped;
+  d.lost_by = std::move(f->lost_by);
+  EndedTracks ended = std::move(f->ended);
+  std::sort(ended.begin(), ended.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return ended;
 }
 
 FrameContext contextOf(TrackedFrame&& f) {
@@ -62,15 +77,8 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
     result.message = std::move(f.message);
     return result;
   }
-  result.timing_ms["tracking"] = f.tracking_ms;
   const double tracking_ms = f.tracking_ms;
-  FrameDiagnostics& d = result.diagnostics;
-  d.tracks_born = f.tracks_born;
-  d.tracks_lost = f.tracks_lost;
-  d.tracks_dropped = f.tracks_dropped;
-  d.lost_by = std::move(f.lost_by);
-  EndedTracks ended = std::move(f.ended);
-  std::sort(ended.begin(), ended.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const EndedTracks ended = takeTrackerCounts(&f, &result);
   FrameContext frame = contextOf(std::move(f));
 
   const auto t_start = TimingClock::now();
@@ -79,47 +87,48 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
     case TrackingState::kRelocalizing: relocalize(frame, &result); break;
     default: initialize(frame, &result);
   }
-  result.points.reserve(frame.tracks.size());
-  std::size_t mapped = 0;
-  prev_mapped_ids.clear();
-  frame.landmarks.resize(frame.tracks.size());
-  for (std::size_t i = 0; i < frame.tracks.size(); ++i) {
-    const FrameTrack& t = frame.tracks[i];
-    FramePoint p;
-    p.track_id = t.id;
-    p.uv = t.uv;
-    p.intensity = t.intensity;
-    const map::Landmark* l = map.landmark(t.id);
-    frame.landmarks[i] = l;  // the frame's lookup, as the map is now
-    if (l) {
-      p.has_position = true;
-      p.p_w = l->p_w;
-      ++mapped;
-      if (result.pose_valid) prev_mapped_ids.push_back(t.id);
-    }
-    result.points.push_back(p);
-  }
-  if (!std::is_sorted(prev_mapped_ids.begin(), prev_mapped_ids.end())) {
-    std::sort(prev_mapped_ids.begin(), prev_mapped_ids.end());
-  }
-  d.keyframes = map.keyframes().size();
-  if (result.pose_valid) {
-    const TriangulationBacklog b = mapper.backlog(frame, result.T_w_c, map);
-    d.candidates = b.candidates;
-    d.candidates_two_keyframes = b.seen_twice;
-    d.candidate_parallax_deg = b.median_parallax_deg;
-  }
-  result.num_mapped = mapped;
-  result.num_tracked = frame.tracks.size();
-  result.map_size = map.landmarks().size();
-  result.init_retries = counters.init_retries;
-  result.relocalizations = counters.relocalizations;
+  describeFrame(frame, &result);
   // total = the work of both stages for this frame (tracking + mapping).
   const double total = tracking_ms + elapsedMs(t_start);
   timings.add("total", total);
   result.timing_ms["total"] = total;
   ++counters.frames_processed;
   return result;
+}
+
+void System::Impl::describeFrame(const FrameContext& frame, FrameResult* result) {
+  result->points.reserve(frame.tracks.size());
+  std::size_t mapped = 0;
+  prev_mapped_ids.clear();
+  for (const FrameTrack& t : frame.tracks) {
+    FramePoint p;
+    p.track_id = t.id;
+    p.uv = t.uv;
+    p.intensity = t.intensity;
+    if (const map::Landmark* l = map.landmark(t.id)) {
+      p.has_position = true;
+      p.p_w = l->p_w;
+      ++mapped;
+      if (result->pose_valid) prev_mapped_ids.push_back(t.id);
+    }
+    result->points.push_back(p);
+  }
+  if (!std::is_sorted(prev_mapped_ids.begin(), prev_mapped_ids.end())) {
+    std::sort(prev_mapped_ids.begin(), prev_mapped_ids.end());
+  }
+  FrameDiagnostics& d = result->diagnostics;
+  d.keyframes = map.keyframes().size();
+  if (result->pose_valid) {
+    const TriangulationBacklog b = mapper.backlog(frame, result->T_w_c, map);
+    d.candidates = b.candidates;
+    d.candidates_two_keyframes = b.seen_twice;
+    d.candidate_parallax_deg = b.median_parallax_deg;
+  }
+  result->num_mapped = mapped;
+  result->num_tracked = frame.tracks.size();
+  result->map_size = map.landmarks().size();
+  result->init_retries = counters.init_retries;
+  result->relocalizations = counters.relocalizations;
 }
 
 void System::Impl::recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c) {
@@ -133,10 +142,36 @@ void System::Impl::recordPose(double t, const std::string& text, const Eigen::Is
   if (counters.first_init_frame < 0) ++counters.localized_before_init;  // the reference and in-between frames
 }
 
-void System::Impl::endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame) {
-  if (removed.empty()) return;
-  front_end.dropTracks(removed);
-  frame.lookup(map);
+AppliedMapUpdate System::Impl::applyUpdate(const MapUpdate& update) {
+  OffencePolicy policy;
+  policy.max_outlier_count = config.max_outlier_count;
+  policy.localization_only = localization_only;
+  AppliedMapUpdate applied = applyMapUpdate(update, policy, &map);
+  front_end.dropTracks(applied.removed);  // their tracks end before the next image is tracked
+  counters.reused_map_points += static_cast<std::uint64_t>(applied.reassociated);
+  return applied;
+}
+
+void System::Impl::markTracksSeen(const FrameContext& frame) {
+  for (const FrameTrack& t : frame.tracks) map.markSeen(t.id, frame.frame_index);
+}
+
+int System::Impl::reuseMapPoints(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, bool all_dormant) {
+  MapUpdate u;
+  u.reassociations = reuse.associate(frame, T_w_c, scene_depth, map, all_dormant);
+  return applyUpdate(u).reassociated;
+}
+
+void System::Impl::penalize(const std::vector<std::uint64_t>& outliers) {
+  MapUpdate u;
+  u.offenders = outliers;
+  applyUpdate(u);
+}
+
+FrameRefinement System::Impl::refine(const FrameContext& frame, const Eigen::Isometry3d& T_w_c) {
+  FrameRefinement refined = mapper.refineFrame(frame, T_w_c, map);
+  applyUpdate(refined.update);
+  return refined;
 }
 
 void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
@@ -160,18 +195,32 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
     return;
   }
   InitialMap& m = attempt.map;
-  result->diagnostics.keyframe = true;
-  result->diagnostics.triangulated = static_cast<int>(m.landmarks.size());
-  result->diagnostics.init_from_homography = m.from_homography;
-  result->diagnostics.init_ambiguous = m.ambiguous;
+  FrameDiagnostics& d = result->diagnostics;
+  d.keyframe = true;
+  d.triangulated = static_cast<int>(m.landmarks.size());
+  d.init_from_homography = m.from_homography;
+  d.init_ambiguous = m.ambiguous;
+  startMap(&m, frame);
+  const Eigen::Isometry3d T_w_c = localizeInitialFrames(m, frame);
+  relocalizer.addKeyframe(frame.image, frame, map, T_w_c);
+  report(RecoveryEvent::kMapBuilt, frame, result);
+  result->pose_valid = true;
+  result->T_w_c = T_w_c;
+  result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
+                    std::to_string(m.parallax_deg) + " deg" + m.notes;
+}
+
+void System::Impl::startMap(InitialMap* m, const FrameContext& frame) {
   map.clear();
   ground.reset();  // a new map, a new scale
-  for (const map::NewLandmark& l : m.landmarks) map.addLandmark(l);
-  map.addKeyframe(std::move(m.reference));
-  map.addKeyframe(std::move(m.current));
+  for (const map::NewLandmark& l : m->landmarks) map.addLandmark(l);
+  map.addKeyframe(std::move(m->reference));
+  map.addKeyframe(std::move(m->current));
   map.markAllSeen(frame.frame_index);
-  endTracks(mapper.optimizeWindow(&map), frame);
+  applyUpdate(mapper.optimizeWindow(map));
+}
 
+Eigen::Isometry3d System::Impl::localizeInitialFrames(const InitialMap& m, const FrameContext& frame) {
   // The reference frame and the frames in between, localized against the new map.
   Eigen::Isometry3d guess = map.keyframes().front().T_w_c;
   recordPose(m.reference_frame.timestamp, m.reference_frame.timestamp_text, guess);
@@ -189,13 +238,7 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   if (trajectory.size() >= 2) T_prev_cur = trajectory[trajectory.size() - 2].T_w_c.inverse() * T_w_c;
   motion.restart(T_w_c, T_prev_cur);
   initialized_once = true;
-  frame.lookup(map);
-  relocalizer.addKeyframe(frame.image, frame, T_w_c);
-  report(RecoveryEvent::kMapBuilt, frame, result);
-  result->pose_valid = true;
-  result->T_w_c = T_w_c;
-  result->message = "initialized: " + std::to_string(map.landmarks().size()) + " points, parallax " +
-                    std::to_string(m.parallax_deg) + " deg" + m.notes;
+  return T_w_c;
 }
 
 Transition System::Impl::report(RecoveryEvent event, const FrameContext& frame, FrameResult* result) {
@@ -267,80 +310,44 @@ System::Impl::MapSearch System::Impl::searchMap(FrameContext& frame, FrameResult
 // the frame becomes a keyframe so that new points are triangulated from it.
 bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result) {
   FrameDiagnostics& d = result->diagnostics;
-  frame.lookup(map);
-  d.reused = reuse.associate(frame, T_w_guess, scene_depth, &map, true);
-  frame.lookup(map);
-  const PoseEstimate pose = localizer.estimate(frame, T_w_guess);
+  d.reused = reuseMapPoints(frame, T_w_guess, true);
+  const PoseEstimate pose = localizer.estimate(frame, map, T_w_guess);
   d.pose_points = pose.num_points;
   d.pose_inliers = pose.num_inliers;
   if (!pose.ok) return false;
-  endTracks(mapper.penalize(pose.outliers, &map), frame);
-  Eigen::Isometry3d T_w_c = pose.T_w_c;
-  d.reused += reuse.associate(frame, T_w_c, scene_depth, &map, true);
-  frame.lookup(map);
-  const FrameRefinement refined = mapper.refineFrame(frame, &T_w_c, &map);
-  endTracks(refined.removed, frame);
+  penalize(pose.outliers);
+  d.reused += reuseMapPoints(frame, pose.T_w_c, true);
+  const FrameRefinement refined = refine(frame, pose.T_w_c);
+  Eigen::Isometry3d T_w_c = refined.T_w_c;
   if (!T_w_c.matrix().allFinite()) return false;
   result->T_w_c_covariance = refined.covariance;
   result->T_w_c_covariance_valid = refined.covariance_valid;
-  for (const map::Landmark* l : frame.landmarks) {
-    if (l) map.markSeen(l->id, frame.frame_index);
-  }
+  markTracksSeen(frame);
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   motion.restart(T_w_c, Eigen::Isometry3d::Identity());
-  if (!localization_only) {
-    const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
-    d.keyframe = true;
-    d.triangulated = kf.triangulated;
-    d.triangulation_rejected_by = kf.rejected_by;
-    front_end.dropTracks(kf.removed);
-    T_w_c = kf.T_w_c;
-    motion.correctLast(T_w_c);
-    trajectory.back().T_w_c = T_w_c;
-    relocalizer.addKeyframe(frame.image, frame, T_w_c);
-  }
+  if (!localization_only) T_w_c = insertKeyframe(frame, T_w_c, &d);
   result->pose_valid = true;
   result->T_w_c = T_w_c;
   return true;
 }
 
 void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameResult* result) {
-  FrameDiagnostics& d = result->diagnostics;
-  frame.lookup(map);
-  for (const map::Landmark* l : frame.landmarks) {
-    if (l) map.markSeen(l->id, frame.frame_index);
+  markTracksSeen(frame);
+  const PoseEstimate pose = estimatePose(frame, ended, result);
+  if (!pose.ok) {
+    lose(frame, RecoveryEvent::kPoseFailed, pose.why, result);
+    return;
   }
-  Eigen::Isometry3d T_w_c;
+  Eigen::Isometry3d T_w_c = pose.T_w_c;
   {
-    ScopedTimer pose_timer(&timings, "pose", &result->timing_ms);
-    // Accepted only when well constrained (enough inliers, and most of the
-    // tracked map points agree): however many tracks a turn or a cut ended.
-    const PoseEstimate pose = localizer.estimate(frame, motion.predict(), &motion.lastPose());
-    d.pose_points = pose.num_points;
-    d.pose_inliers = pose.num_inliers;
-    // Where the ended map tracks went: judged at the new pose, or at the
-    // motion model's prediction when there is none.
-    diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : motion.predict(), &d);
-    if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
-    if (pose.weak_kept) {
-      result->message = "weak pose kept: " + std::to_string(pose.num_inliers) + " of " +
-                        std::to_string(pose.num_points) + " tracked map points agree, the step is the predicted one";
-    }
-    pose_timer.stop();
-    if (!pose.ok) {
-      lose(frame, RecoveryEvent::kPoseFailed, pose.why, result);
-      return;
-    }
     // Localized: new tracks where old map points project take them over.
-    ScopedTimer reuse_timer(&timings, "reuse", &result->timing_ms);
-    T_w_c = pose.T_w_c;
-    d.reused = reuse.associate(frame, T_w_c, scene_depth, &map);
-    if (d.reused > 0) frame.lookup(map);
+    ScopedTimer timer(&timings, "reuse", &result->timing_ms);
+    result->diagnostics.reused = reuseMapPoints(frame, T_w_c, false);
   }
   {
     ScopedTimer timer(&timings, "ba", &result->timing_ms);
-    const FrameRefinement refined = mapper.refineFrame(frame, &T_w_c, &map);
-    endTracks(refined.removed, frame);
+    const FrameRefinement refined = refine(frame, T_w_c);
+    T_w_c = refined.T_w_c;
     result->T_w_c_covariance = refined.covariance;
     result->T_w_c_covariance_valid = refined.covariance_valid;
   }
@@ -356,39 +363,72 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
   motion.update(T_w_c);
   {
     ScopedTimer timer(&timings, "map", &result->timing_ms);
-    const KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
-    d.keyframe_parallax_px = decision.parallax_px;
-    if (decision.needed) {
-      const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
-      d.keyframe = true;
-      d.triangulated = kf.triangulated;
-      d.triangulation_rejected_by = kf.rejected_by;
-      front_end.dropTracks(kf.removed);
-      T_w_c = kf.T_w_c;
-      motion.correctLast(T_w_c);
-      if (!trajectory.empty()) trajectory.back().T_w_c = T_w_c;
-      relocalizer.addKeyframe(frame.image, frame, T_w_c);
-      if (ground.enabled()) holdGroundScale(frame, T_w_c, &d);
-    }
-    // Median depth of the mapped points in view: the map's scale at this place.
-    std::vector<double> depths;
-    const Eigen::Isometry3d T_c_w = T_w_c.inverse();
-    for (const map::Landmark* l : frame.landmarks) {
-      if (l) depths.push_back((T_c_w * l->p_w).z());
-    }
-    if (depths.size() > 20) scene_depth = std::max(1e-6, upperMedian(depths));
+    T_w_c = extendMap(frame, T_w_c, &result->diagnostics);
   }
   report(RecoveryEvent::kPoseFound, frame, result);
   result->pose_valid = true;
   result->T_w_c = T_w_c;
 }
 
+PoseEstimate System::Impl::estimatePose(const FrameContext& frame, const EndedTracks& ended, FrameResult* result) {
+  ScopedTimer timer(&timings, "pose", &result->timing_ms);
+  FrameDiagnostics& d = result->diagnostics;
+  // Accepted only when well constrained (enough inliers, and most of the
+  // tracked map points agree): however many tracks a turn or a cut ended.
+  PoseEstimate pose = localizer.estimate(frame, map, motion.predict(), &motion.lastPose());
+  d.pose_points = pose.num_points;
+  d.pose_inliers = pose.num_inliers;
+  // Where the ended map tracks went: judged at the new pose, or at the
+  // motion model's prediction when there is none.
+  diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : motion.predict(), &d);
+  if (pose.ok) penalize(pose.outliers);
+  if (pose.weak_kept) {
+    result->message = "weak pose kept: " + std::to_string(pose.num_inliers) + " of " + std::to_string(pose.num_points) +
+                      " tracked map points agree, the step is the predicted one";
+  }
+  return pose;
+}
+
+Eigen::Isometry3d System::Impl::extendMap(const FrameContext& frame, Eigen::Isometry3d T_w_c, FrameDiagnostics* d) {
+  const KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
+  d->keyframe_parallax_px = decision.parallax_px;
+  if (decision.needed) {
+    T_w_c = insertKeyframe(frame, T_w_c, d);
+    if (ground.enabled()) holdGroundScale(frame, T_w_c, d);
+  }
+  // Median depth of the mapped points in view: the map's scale at this place.
+  std::vector<double> depths;
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+  for (const FrameTrack& t : frame.tracks) {
+    if (const map::Landmark* l = map.landmark(t.id)) depths.push_back((T_c_w * l->p_w).z());
+  }
+  if (depths.size() > 20) scene_depth = std::max(1e-6, upperMedian(depths));
+  return T_w_c;
+}
+
+Eigen::Isometry3d System::Impl::insertKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
+                                               FrameDiagnostics* d) {
+  map.addKeyframe(Mapper::keyframeOf(frame, T_w_c));
+  Triangulation made = mapper.triangulate(frame, map);
+  for (const map::NewLandmark& l : made.landmarks) map.addLandmark(l);
+  d->keyframe = true;
+  d->triangulated = static_cast<int>(made.landmarks.size());
+  d->triangulation_rejected_by = std::move(made.rejected_by);
+  applyUpdate(mapper.optimizeWindow(map));
+  // The window BA moved the new keyframe: the frame's pose is the keyframe's.
+  const Eigen::Isometry3d T_w_kf = map.keyframes().back().T_w_c;
+  motion.correctLast(T_w_kf);
+  if (!trajectory.empty()) trajectory.back().T_w_c = T_w_kf;
+  relocalizer.addKeyframe(frame.image, frame, map, T_w_kf);
+  return T_w_kf;
+}
+
 void System::Impl::holdGroundScale(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d) {
   std::vector<Eigen::Vector3d> points_c;
-  points_c.reserve(frame.landmarks.size());
+  points_c.reserve(frame.tracks.size());
   const Eigen::Isometry3d T_c_w = T_w_c.inverse();
-  for (const map::Landmark* l : frame.landmarks) {
-    if (l) points_c.push_back(T_c_w * l->p_w);
+  for (const FrameTrack& t : frame.tracks) {
+    if (const map::Landmark* l = map.landmark(t.id)) points_c.push_back(T_c_w * l->p_w);
   }
   const ScaleCorrection c = ground.update(points_c, motion.lastStepLength());
   d->ground_height = c.measured ? c.height : 0.0;
@@ -477,7 +517,7 @@ std::vector<MapPoint3> System::mapPoints() const {
 
 std::size_t System::framesProcessed() const { return impl_->counters.frames_processed; }
 std::size_t System::framesTracked() const { return impl_->counters.frames_tracked; }
-std::size_t System::reusedMapPoints() const { return impl_->reuse.totalReused(); }
+std::size_t System::reusedMapPoints() const { return impl_->counters.reused_map_points; }
 std::size_t System::dormantMapPoints() const { return impl_->map.dormant().size(); }
 long long System::firstInitFrame() const {
   const long long f = impl_->counters.first_init_frame;

@@ -14,6 +14,7 @@
 #include "vitamin_e/pipeline/initializer.h"
 #include "vitamin_e/pipeline/localizer.h"
 #include "vitamin_e/pipeline/map_reuse.h"
+#include "vitamin_e/pipeline/map_update.h"
 #include "vitamin_e/pipeline/mapper.h"
 #include "vitamin_e/pipeline/motion_model.h"
 #include "vitamin_e/pipeline/recovery.h"
@@ -30,6 +31,7 @@ struct RunCounters {
   std::uint64_t localized_before_init = 0;  // poses recorded for frames before it
   int init_retries = 0;                     // new maps after a loss
   int relocalizations = 0;                  // losses recovered in the existing map
+  std::uint64_t reused_map_points = 0;      // map points taken over by new tracks (map reuse)
 };
 
 // The tracks the front end ended at this frame, with the check that ended
@@ -43,9 +45,20 @@ struct System::Impl {
   FrameResult mapFrame(TrackedFrame&& frame);
   void reset();
 
-  // The steps of mapFrame (system.cpp).
+  // The steps of mapFrame (system.cpp), one per tracking state: initialize,
+  // track, relocalize; Recovery decides which.
   void initialize(FrameContext& frame, FrameResult* result);
+  void startMap(InitialMap* m, const FrameContext& frame);  // the initializer's map becomes the map
+  // The first map's frames get their poses; returns the current frame's.
+  Eigen::Isometry3d localizeInitialFrames(const InitialMap& m, const FrameContext& frame);
   void track(FrameContext& frame, const EndedTracks& ended, FrameResult* result);
+  PoseEstimate estimatePose(const FrameContext& frame, const EndedTracks& ended, FrameResult* result);
+  // At a tracked pose: a keyframe when one is needed, the scale held to the road,
+  // the scene depth updated. Returns the frame's pose (moved by a keyframe BA).
+  Eigen::Isometry3d extendMap(const FrameContext& frame, Eigen::Isometry3d T_w_c, FrameDiagnostics* d);
+  // The frame as a keyframe: triangulation, window BA, relocalizer index.
+  // Returns the frame's pose after the window BA.
+  Eigen::Isometry3d insertKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d);
   // A loss (kPoseFailed, kPoseJumped; why: the message's detail).
   void lose(FrameContext& frame, RecoveryEvent event, const std::string& why, FrameResult* result);
   // A frame of the relocalizing state.
@@ -56,12 +69,20 @@ struct System::Impl {
     std::string message;  // where it was found, or why not
   };
   MapSearch searchMap(FrameContext& frame, FrameResult* result);
+  bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
   // The frame's event through Recovery: its state and reason set in *result,
   // and a new map started when the transition asks for one.
   Transition report(RecoveryEvent event, const FrameContext& frame, FrameResult* result);
   static void setOutcome(const Transition& t, FrameResult* result);
-  bool resume(FrameContext& frame, const Eigen::Isometry3d& T_w_guess, FrameResult* result);
-  void endTracks(const std::vector<std::uint64_t>& removed, FrameContext& frame);
+  // The frame's points, counts and backlog in its result.
+  void describeFrame(const FrameContext& frame, FrameResult* result);
+
+  // Changes of the map the stages return, applied (the offenders' tracks end).
+  AppliedMapUpdate applyUpdate(const MapUpdate& update);
+  void penalize(const std::vector<std::uint64_t>& outliers);
+  int reuseMapPoints(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, bool all_dormant);
+  FrameRefinement refine(const FrameContext& frame, const Eigen::Isometry3d& T_w_c);  // per-frame BA, applied
+  void markTracksSeen(const FrameContext& frame);
   // At a keyframe: the road plane under the camera measures the map's scale
   // (ground.enabled); a correction rescales everything that holds map units.
   void holdGroundScale(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d);

@@ -23,7 +23,7 @@ namespace {
 // A frame at T_w_c observing `n` points 3-8 m in front; a share `bad` of the
 // tracks are moved to random places in the image (tracker failures).
 struct Scene {
-  std::vector<ve::map::Landmark> landmarks;
+  ve::map::Map map;
   FrameContext frame;
 };
 
@@ -32,19 +32,18 @@ Scene makeScene(const Eigen::Isometry3d& T_w_c, int n, double bad, unsigned seed
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_real_distribution<double> depth(3.0, 8.0);
   Scene s;
-  s.landmarks.resize(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d xy1(0.6 * u(rng), 0.4 * u(rng), 1.0);
-    ve::map::Landmark& l = s.landmarks[static_cast<std::size_t>(i)];
+    ve::map::NewLandmark l;
     l.id = static_cast<std::uint64_t>(i + 1);
     l.p_w = T_w_c * (depth(rng) * xy1);
+    s.map.addLandmark(l);
     ve::pipeline::FrameTrack t{};
     t.id = l.id;
     t.xy = xy1.head<2>();
     if (i < static_cast<int>(bad * n)) t.xy = Eigen::Vector2d(0.6 * u(rng), 0.4 * u(rng));
     s.frame.tracks.push_back(t);
   }
-  for (const ve::map::Landmark& l : s.landmarks) s.frame.landmarks.push_back(&l);
   return s;
 }
 
@@ -60,7 +59,7 @@ TEST(Localizer, RefusesAPoseMostPointsDisagreeWithWithoutAPrediction) {
   const Localizer localizer{SystemConfig{}};
   const Eigen::Isometry3d T_w_c = forward(1.0);
   const Scene s = makeScene(T_w_c, 300, 0.6, 1);
-  const PoseEstimate e = localizer.estimate(s.frame, forward(0.9));
+  const PoseEstimate e = localizer.estimate(s.frame, s.map, forward(0.9));
   EXPECT_FALSE(e.ok);
   EXPECT_FALSE(e.weak_kept);
   EXPECT_NE(e.why.find("weak pose"), std::string::npos) << e.why;
@@ -71,7 +70,7 @@ TEST(Localizer, KeepsAWeakPoseThatMovesAsPredicted) {
   const Eigen::Isometry3d T_w_last = forward(0.9);
   const Eigen::Isometry3d T_w_predicted = forward(1.02);  // 0.12 predicted, 0.10 true
   const Scene s = makeScene(forward(1.0), 300, 0.6, 2);
-  const PoseEstimate e = localizer.estimate(s.frame, T_w_predicted, &T_w_last);
+  const PoseEstimate e = localizer.estimate(s.frame, s.map, T_w_predicted, &T_w_last);
   ASSERT_TRUE(e.ok) << e.why;
   EXPECT_TRUE(e.weak_kept);
   EXPECT_LT(e.num_inliers, 150);
@@ -84,12 +83,12 @@ TEST(Localizer, RefusesAWeakPoseWhoseStepIsFarFromThePredictedOne) {
   // The camera was predicted to move 0.5 but the pose moved 0.1: a scale jump.
   const Eigen::Isometry3d T_w_last = forward(0.9);
   const Eigen::Isometry3d T_w_predicted = forward(1.4);
-  const PoseEstimate e = localizer.estimate(s.frame, T_w_predicted, &T_w_last);
+  const PoseEstimate e = localizer.estimate(s.frame, s.map, T_w_predicted, &T_w_last);
   EXPECT_FALSE(e.ok);
   EXPECT_FALSE(e.weak_kept);
   // ... and so when the pose moved 4 times the predicted step.
   const Eigen::Isometry3d T_w_last_near = forward(0.98);
-  const PoseEstimate e2 = localizer.estimate(s.frame, forward(0.985), &T_w_last_near);
+  const PoseEstimate e2 = localizer.estimate(s.frame, s.map, forward(0.985), &T_w_last_near);
   EXPECT_FALSE(e2.ok) << "a 0.02 step kept against a 0.005 prediction";
 }
 
@@ -97,7 +96,7 @@ TEST(Localizer, AStrongPoseNeedsNoPrediction) {
   const Localizer localizer{SystemConfig{}};
   const Scene s = makeScene(forward(1.0), 300, 0.2, 4);
   const Eigen::Isometry3d T_w_last = forward(0.9);
-  const PoseEstimate e = localizer.estimate(s.frame, forward(1.4), &T_w_last);
+  const PoseEstimate e = localizer.estimate(s.frame, s.map, forward(1.4), &T_w_last);
   ASSERT_TRUE(e.ok) << e.why;
   EXPECT_FALSE(e.weak_kept);
   EXPECT_NEAR(e.T_w_c.translation().z(), 1.0, 1e-3);
@@ -109,7 +108,7 @@ TEST(Localizer, WeakPosesAreNeverKeptWithRatioOne) {
   const Localizer localizer{config};
   const Scene s = makeScene(forward(1.0), 300, 0.6, 5);
   const Eigen::Isometry3d T_w_last = forward(0.9);
-  const PoseEstimate e = localizer.estimate(s.frame, forward(1.0), &T_w_last);
+  const PoseEstimate e = localizer.estimate(s.frame, s.map, forward(1.0), &T_w_last);
   EXPECT_FALSE(e.ok);
 }
 

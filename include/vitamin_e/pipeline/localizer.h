@@ -34,7 +34,7 @@ class Localizer {
   // pose the guess was predicted from (constant velocity), or null when the
   // guess is not a prediction; it lets a weakly supported pose through when
   // its step agrees with the predicted one.
-  PoseEstimate estimate(const FrameContext& frame, const Eigen::Isometry3d& guess,
+  PoseEstimate estimate(const FrameContext& frame, const map::Map& map, const Eigen::Isometry3d& guess,
                         const Eigen::Isometry3d* T_w_last = nullptr) const;
   // A pose from normalized observations keyed by track id (frames seen while initializing).
   PoseEstimate estimate(const map::Map& map, const std::unordered_map<std::uint64_t, Eigen::Vector2d>& xy,

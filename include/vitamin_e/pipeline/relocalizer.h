@@ -59,9 +59,10 @@ class Relocalizer {
  public:
   Relocalizer(const RelocalizerConfig& config, const camera::Camera& camera, const geometry::PnpConfig& pnp);
 
-  // Indexes the frame as a keyframe at T_w_c: its thumbnail and its mapped
-  // tracks (frame.landmarks) with their descriptors and current positions.
-  void addKeyframe(const cv::Mat& image, const FrameContext& frame, const Eigen::Isometry3d& T_w_c);
+  // Indexes the frame as a keyframe at T_w_c: its tracks that carry a map point,
+  // with their descriptors and the points' current positions.
+  void addKeyframe(const cv::Mat& image, const FrameContext& frame, const map::Map& map,
+                   const Eigen::Isometry3d& T_w_c);
   // Looks for the frame in the index. Positions come from the map where the
   // point is still a landmark, else from the index.
   Relocalization relocalize(const cv::Mat& image, const FrameContext& frame, const map::Map& map) const;
