@@ -33,6 +33,52 @@ void checkCamera(const camera::Camera& map_camera, const camera::Camera& camera)
   }
 }
 
+// Throws std::invalid_argument naming what makes the map file unusable here.
+void checkLoadable(const map::MapFileContents& c, const camera::Camera& camera, bool relocalization_enabled,
+                   const map::DescriptorSettings& mine) {
+  checkCamera(c.camera, camera);
+  if (!relocalization_enabled) {
+    throw std::invalid_argument("relocalization.enabled is false: the camera could not be found in a loaded map");
+  }
+  if (c.descriptors.patch_size != mine.patch_size || c.descriptors.smoothing_sigma != mine.smoothing_sigma) {
+    throw std::invalid_argument("the map's keyframes were described with relocalization.patch_size " +
+                                std::to_string(c.descriptors.patch_size) + " and smoothing_sigma " +
+                                std::to_string(c.descriptors.smoothing_sigma) + ", this configuration has " +
+                                std::to_string(mine.patch_size) + " and " + std::to_string(mine.smoothing_sigma));
+  }
+  if (c.keyframe_index.empty()) {
+    throw std::invalid_argument("the map has no indexed keyframe: the camera could not be found in it");
+  }
+  if (!(c.scene_depth > 0.0) || !std::isfinite(c.scene_depth)) {
+    throw std::invalid_argument("the map's scene depth is not positive");
+  }
+}
+
+// Frames and tracks go on after every index and id the map holds.
+struct Numbering {
+  std::uint64_t frame = 0;
+  std::uint64_t track = 0;
+};
+Numbering numberingAfter(const map::MapFileContents& c) {
+  Numbering next;
+  auto frame = [&](std::uint64_t f) { next.frame = std::max(next.frame, f + 1); };
+  auto track = [&](std::uint64_t id) { next.track = std::max(next.track, id + 1); };
+  for (const map::Keyframe& kf : c.map.keyframes) {
+    frame(kf.frame_index);
+    for (const auto& o : kf.observations) track(o.first);
+  }
+  for (const map::Landmark& l : c.map.landmarks) {
+    frame(l.last_seen_frame);
+    track(l.id);
+  }
+  for (const map::DormantLandmark& d : c.map.dormant) track(d.id);
+  for (const map::IndexedKeyframe& kf : c.keyframe_index) {
+    frame(kf.frame_index);
+    for (const map::IndexedPoint& p : kf.points) track(p.landmark_id);
+  }
+  return next;
+}
+
 }  // namespace
 
 // A new map would discard the loaded one (and a later save would overwrite its
@@ -56,46 +102,13 @@ void System::loadMap(const map::MapFileContents& c) {
   if (s.counters.frames_processed > 0 || s.front_end.frameIndexOffset() > 0) {
     throw std::invalid_argument("a map can only be loaded before the first frame");
   }
-  checkCamera(c.camera, s.camera);
-  if (!s.config.relocalization.enabled) {
-    throw std::invalid_argument("relocalization.enabled is false: the camera could not be found in a loaded map");
-  }
-  const map::DescriptorSettings mine = s.relocalizer.descriptorSettings();
-  if (c.descriptors.patch_size != mine.patch_size || c.descriptors.smoothing_sigma != mine.smoothing_sigma) {
-    throw std::invalid_argument("the map's keyframes were described with relocalization.patch_size " +
-                                std::to_string(c.descriptors.patch_size) + " and smoothing_sigma " +
-                                std::to_string(c.descriptors.smoothing_sigma) + ", this configuration has " +
-                                std::to_string(mine.patch_size) + " and " + std::to_string(mine.smoothing_sigma));
-  }
-  if (c.keyframe_index.empty()) {
-    throw std::invalid_argument("the map has no indexed keyframe: the camera could not be found in it");
-  }
-  if (!(c.scene_depth > 0.0) || !std::isfinite(c.scene_depth)) {
-    throw std::invalid_argument("the map's scene depth is not positive");
-  }
+  checkLoadable(c, s.camera, s.config.relocalization.enabled, s.relocalizer.descriptorSettings());
   map::Map restored(s.config.map);
   restored.restore(c.map);  // throws, leaving this system as it was
-  // Frames and tracks go on after every index and id the map holds.
-  std::uint64_t next_frame = 0, next_track = 0;
-  auto frame = [&](std::uint64_t f) { next_frame = std::max(next_frame, f + 1); };
-  auto track = [&](std::uint64_t id) { next_track = std::max(next_track, id + 1); };
-  for (const map::Keyframe& kf : c.map.keyframes) {
-    frame(kf.frame_index);
-    for (const auto& o : kf.observations) track(o.first);
-  }
-  for (const map::Landmark& l : c.map.landmarks) {
-    frame(l.last_seen_frame);
-    track(l.id);
-  }
-  for (const map::DormantLandmark& d : c.map.dormant) track(d.id);
-  for (const map::IndexedKeyframe& kf : c.keyframe_index) {
-    frame(kf.frame_index);
-    for (const map::IndexedPoint& p : kf.points) track(p.landmark_id);
-  }
-
+  const Numbering next = numberingAfter(c);
   s.map = std::move(restored);
   s.relocalizer.importEntries(c.keyframe_index);
-  s.front_end.continueNumbering(next_frame, next_track);
+  s.front_end.continueNumbering(next.frame, next.track);
   s.initializer.reset();
   s.motion.invalidate();
   s.scene_depth = c.scene_depth;
