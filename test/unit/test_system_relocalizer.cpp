@@ -234,6 +234,40 @@ TEST(Relocalizer, ExportedEntriesImportedIntoAnotherRelocalizerFindTheSameCamera
   EXPECT_EQ(one.exportEntries().front().frame_index, 2u);
 }
 
+TEST(Relocalizer, ARescaleMovesTheIndexedKeyframesAndPointsWithTheMap) {
+  // A map rescaled about a centre (ground.enabled's correction): the index
+  // follows, so that a lost camera is found where it is in the rescaled map,
+  // also from the index's own positions alone (an empty map).
+  ve::map::Map map;
+  Relocalizer relocalizer(RelocalizerConfig{}, world().camera, pnpConfig());
+  indexKeyframe(cameraAt(0.0, 0.0, 0.0), 1, &map, &relocalizer);
+  const std::vector<ve::map::IndexedKeyframe> before = relocalizer.exportEntries();
+  const Eigen::Vector3d centre(0.5, -0.2, 1.0);
+  const double factor = 1.3;
+  auto scaled = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d { return centre + factor * (x - centre); };
+  map.rescale(centre, factor);
+  relocalizer.rescale(centre, factor);
+
+  const std::vector<ve::map::IndexedKeyframe> after = relocalizer.exportEntries();
+  ASSERT_EQ(after.size(), 1u);
+  ASSERT_EQ(after[0].points.size(), before[0].points.size());
+  EXPECT_LT((after[0].T_w_c.translation() - scaled(before[0].T_w_c.translation())).norm(), 1e-12);
+  EXPECT_TRUE(after[0].T_w_c.linear() == before[0].T_w_c.linear()) << "a rescale does not turn a keyframe";
+  for (std::size_t i = 0; i < after[0].points.size(); ++i) {
+    EXPECT_LT((after[0].points[i].p_w - scaled(before[0].points[i].p_w)).norm(), 1e-12) << "point " << i;
+  }
+
+  const Eigen::Isometry3d T_w_lost = cameraAt(0.2, -0.98, 0.17);
+  Eigen::Isometry3d expected = T_w_lost;
+  expected.translation() = scaled(T_w_lost.translation());
+  const FrameContext lost = world().detect(world().render(T_w_lost, 94), 3);
+  for (const bool with_map : {true, false}) {
+    const Relocalization r = relocalizer.relocalize(lost.image, lost, with_map ? map : ve::map::Map());
+    ASSERT_TRUE(r.ok) << r.why;
+    expectNear(r.T_w_c, expected, 0.01 * factor, 0.2);
+  }
+}
+
 TEST(Relocalizer, RejectsBadConfig) {
   RelocalizerConfig c;
   c.patch_size = 8;
