@@ -21,6 +21,7 @@
 
 #include "vitamin_e/eval/metrics.h"
 #include "vitamin_e/map/map_file.h"
+#include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/synth/renderer.h"
 #include "vitamin_e/synth/scene.h"
@@ -172,18 +173,19 @@ TEST(SystemMapPersistence, LocalizationOnlyFindsTheCameraInTheLoadedMapAndChange
   // Found at once: measured, relocalized at the first frame against a keyframe
   // of the first run's way back over the same place (926 of 945 matches).
   EXPECT_EQ(run.results.front().state, TrackingState::kTracking) << run.results.front().message;
-  EXPECT_EQ(run.results.front().message.rfind("relocalized", 0), 0u) << run.results.front().message;
+  EXPECT_EQ(run.results.front().reason, ve::pipeline::StateReason::kRelocalized) << run.results.front().message;
   expectAllLocalizedAfter(run, 10);
   EXPECT_EQ(system.initRetries(), 0);
   EXPECT_EQ(system.firstInitFrame(), -1);
   EXPECT_GE(system.relocalizations(), 1);
   EXPECT_EQ(run.results.front().frame_index, 0u);  // this stream's own numbering
   // In the first run's frame and scale: its Sim(3) to ground truth holds.
-  // Measured: 0.145 cm RMSE, 0.30 cm max (the first run's own ATE: 0.136 cm,
-  // 0.32 cm max); 1 cm is the bound.
+  // Measured 0.128 cm RMSE (the first run's own ATE: 0.136 cm); the bound is 1.5x that.
   const ve::eval::EvalResult e = withFirstRunAlignment(run);
+  std::printf("[localization only] %zu of %d frames localized, ATE with the first run's Sim(3) %.4f cm\n", e.matched,
+              kSecondFrames, 100.0 * e.ate.rmse);
   EXPECT_GE(e.matched, static_cast<std::size_t>(kSecondFrames - 10));
-  EXPECT_LT(e.ate.rmse, 0.01) << ve::eval::summary(e, {});
+  EXPECT_LT(e.ate.rmse, 0.0019) << ve::eval::summary(e, {});
   // Nothing added: the same keyframes, no more points, the file untouched.
   const ve::map::MapFileContents after = system.exportMap();
   ASSERT_EQ(after.map.keyframes.size(), loaded.map.keyframes.size());
@@ -260,6 +262,46 @@ TEST(SystemMapPersistence, WithALoadedMapALossIsNeverGivenUpForANewMap) {
   EXPECT_EQ(system.initRetries(), 0);
   EXPECT_EQ(system.firstInitFrame(), -1);
   EXPECT_GE(system.relocalizations(), 2);
+}
+
+TEST(SystemMapPersistence, PipelinedSystemLocalizesInALoadedMap) {
+  // The two-thread system (vitamin_e_run --pipelined, the ROS nodelet's mode of
+  // work) given the map before its first frame: found at once, every frame
+  // localized after the first few, in the first run's frame and scale, the map unchanged.
+  const ve::map::MapFileContents loaded = ve::map::loadMapFile(firstRun().map_path);
+  std::vector<ve::pipeline::FrameResult> results;  // written on the mapping thread, read after flush()
+  ve::pipeline::PipelinedSystem pipelined(ve::test::halfResolutionConfig(), world().camera, {},
+                                          [&](ve::pipeline::FrameResult r) { results.push_back(std::move(r)); });
+  pipelined.system().loadMap(loaded);
+  pipelined.system().setLocalizationOnly(true);
+  TripRun run;
+  for (int i = kSecondStart; i < kSecondStart + kSecondFrames; ++i) {
+    const double t = kT0 + i / kRate;
+    const Eigen::Isometry3d T_w_c = cameraPose(i / kRate);
+    ve::synth::RenderOptions options;
+    options.noise_sigma = 1.0;
+    options.noise_seed = 90000 + static_cast<std::uint64_t>(i);
+    ASSERT_TRUE(pipelined.submit(world().renderer->render(T_w_c, options), t));
+    run.ground_truth.push_back({t, T_w_c});
+  }
+  pipelined.flush();
+  const ve::pipeline::System& system = pipelined.system();
+  for (const auto& e : system.trajectory()) run.estimate.push_back({e.timestamp, e.T_w_c});
+  run.results = results;
+  ASSERT_EQ(run.results.size(), static_cast<std::size_t>(kSecondFrames));
+  EXPECT_EQ(run.results.front().reason, ve::pipeline::StateReason::kRelocalized) << run.results.front().message;
+  expectAllLocalizedAfter(run, 10);
+  EXPECT_EQ(system.initRetries(), 0);
+  EXPECT_EQ(system.firstInitFrame(), -1);
+  const ve::eval::EvalResult e = withFirstRunAlignment(run);
+  std::printf("[pipelined, loaded map] %zu of %d frames localized, ATE with the first run's Sim(3) %.4f cm\n",
+              e.matched, kSecondFrames, 100.0 * e.ate.rmse);
+  EXPECT_GE(e.matched, static_cast<std::size_t>(kSecondFrames - 10));
+  // Measured 0.128 cm, as the sequential system's: the bound is 1.5x that.
+  EXPECT_LT(e.ate.rmse, 0.0019) << ve::eval::summary(e, {});
+  const ve::map::MapFileContents after = system.exportMap();
+  EXPECT_EQ(after.map.keyframes.size(), loaded.map.keyframes.size());
+  EXPECT_EQ(after.keyframe_index.size(), loaded.keyframe_index.size());
 }
 
 TEST(SystemMapPersistence, AMapFromAnotherCameraSizeIsRefusedByName) {
