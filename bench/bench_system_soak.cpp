@@ -1,4 +1,4 @@
-// Soak test of the SLAM system (issue 7): the project's synthetic room at low
+// Soak test of the SLAM system: the project's synthetic room at low
 // resolution, rendered in-process frame after frame along the figure-eight path
 // (no PNGs), fed to pipeline::System for a given wall-clock time. Samples the
 // resident memory (/proc/self/statm) every N frames, prints the curve and a

@@ -1,4 +1,4 @@
-# The core for other catkin packages (issue 15, item 7): one shared library,
+# The core for other catkin packages: one shared library,
 # libvitamin_e.so, holding every core module (the in-tree targets keep linking
 # the static modules), exported by catkin_package(LIBRARIES vitamin_e) and
 # installed with the headers (include/vitamin_e/...). A downstream package:

@@ -47,9 +47,9 @@ endforeach()
 # euroc.launch run to its end by roslaunch (its own master), not under rostest: the
 # launch ends itself when the bag ends, which would end a rostest too.
 #  - rostest_euroc_launch_imu: sensors.bag (with /imu0): the map's z within 5 deg of the true
-#    up, the ATE within 10 % of vitamin_e_run's on the same bag (issue 15, item 1)
+#    up, the ATE within 10 % of vitamin_e_run's on the same bag
 #  - rostest_install_space: make install; a package outside the tree links libvitamin_e from
-#    install/ and runs; euroc.launch runs from install/ only (item 7)
+#    install/ and runs; euroc.launch runs from install/ only
 if(TARGET vitamin_e_run AND TARGET vitamin_e_evaluate)
   add_test(NAME rostest_euroc_launch_imu
     COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_euroc_launch.py

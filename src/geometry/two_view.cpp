@@ -318,9 +318,9 @@ TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const s
     if (best_index < 0 || recs.back().num_valid > recs[best_index].num_valid) best_index = static_cast<int>(c);
   }
   // At small parallax a homography fits any scene, and its motions can edge out the
-  // essential one by a few points of noise (V2_02's 12 s render: 3831 vs 3784 points, and
-  // the homography's motion was the wrong one). The twisted motion loses about half of
-  // the points, so a homography motion must beat the essential one clearly.
+  // essential one by a few points of noise while being the wrong motion. The twisted
+  // motion loses about half of the points, so a homography motion must beat the
+  // essential one clearly.
   if (best_index > 0 && recs[best_index].num_valid < (1.0 + config.homography_min_gain) * recs[0].num_valid) {
     best_index = 0;
   }

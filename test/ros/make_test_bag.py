@@ -11,7 +11,7 @@ the sequence comes from it and --make-bag (scripts/make_bag.sh) bags it;
 otherwise the room is ray-cast here with numpy.
 
 With the generator, also OUT_DIR/sensors.bag: the same images with everything the
-ROS-interface tests need (issue 15): /imu0 synthesized by make_bag.sh --imu,
+ROS-interface tests need: /imu0 synthesized by make_bag.sh --imu,
 /cam0/image_raw/compressed (jpeg), /cam0/camera_info and /cam0/image_rect. The
 generator's body is its camera; here the sequence gets EuRoC's body instead (its
 cam0 T_BS, x up), written as the body ground truth and the calibration's T_BS, so

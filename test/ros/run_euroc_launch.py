@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Runs `roslaunch vitamin_e euroc.launch` to its end on a test bag (its own master on a
-free port) and checks the trajectory it writes (issue 15, items 1 and 7).
+free port) and checks the trajectory it writes.
 
     run_euroc_launch.py --data DIR --bag NAME --out DIR --evaluate PATH
         [--install BUILD_DIR]        build install/ (make install) and run from it

@@ -79,7 +79,7 @@ TEST(Rep105, MapToOdomCompletesTheCameraPose) {
                                                                               << composed.matrix() << "\npose:\n"
                                                                               << T_w_c.matrix();
 
-  // Issue 15, item 5: ~odometry is the base's pose (child ~base_frame) with a covariance.
+  // ~odometry is the base's pose (child ~base_frame) with a covariance.
   ASSERT_TRUE(
       odom.waitFor([&](const auto& m) { return !m.empty() && m.back()->header.stamp == last->header.stamp; }, 10.0));
   const auto o = odom.messages().back();

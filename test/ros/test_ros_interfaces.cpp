@@ -1,4 +1,4 @@
-// rostests of issue 15 (the ROS interface as robot builders expect it):
+// rostests of the ROS interface as robot builders expect it:
 //   Interfaces.* (interfaces.test) one bag (sensors.bag: raw, compressed and rectified images,
 //       camera_info) into four tracking nodelets: raw + camera_info (the reference),
 //       ~image_transport compressed, image_rect (rectified camera_info), and raw with a tenth
@@ -109,7 +109,7 @@ TEST(Interfaces, EveryTrackerProcessesTheBag) {
 // stream with K and D (109 mm).
 double sameWithin(double reference) { return std::max(0.1 * reference, 0.0003); }
 
-// Item 3: ~image_transport compressed reads <image>/compressed (here without the plugin,
+// ~image_transport compressed reads <image>/compressed (here without the plugin,
 // decoded with OpenCV) and tracks like the raw images. Only the compressed topic exists for
 // this tracker (interfaces.test remaps it to /cam1), so its frames were decoded.
 TEST(Interfaces, CompressedTrackedLikeRaw) {
@@ -126,7 +126,7 @@ TEST(Interfaces, CompressedTrackedLikeRaw) {
   EXPECT_GT(c.back()->frames_tracked, 30u);
 }
 
-// Item 2: image_rect with the same camera_info is taken as rectified (P, no distortion) and
+// image_rect with the same camera_info is taken as rectified (P, no distortion) and
 // gives the raw stream's trajectory.
 TEST(Interfaces, RectifiedLikeDistorted) {
   ASSERT_TRUE(g_run);
@@ -211,7 +211,7 @@ TEST(Interfaces, DiagnosticsAndCovariance) {
   g_run.reset();
 }
 
-// Item 4: a bag played with --loop: the stamps jump back at the second pass, the SLAM
+// A bag played with --loop: the stamps jump back at the second pass, the SLAM
 // restarts, and the saved trajectory has both passes as two segments, each close to the
 // ground truth. The path is cleared at the jump.
 TEST(Loop, SecondPassTracked) {

@@ -266,7 +266,7 @@ TEST_F(BadInput, ErrorsLoggedNoCrash) {
   EXPECT_TRUE(processed(n0 + 2)) << "the tracker stopped processing after bad input";
 }
 
-// (c, issue 7) The rest of the encoding matrix (bgr8 and mono16 converted, bayer
+// (c) The rest of the encoding matrix (bgr8 and mono16 converted, bayer
 // rejected by name), a repeated stamp, and a stamp of wall-clock size after
 // bag-sized ones: only the order of stamps matters.
 TEST_F(BadInput, MoreEncodingsAndStamps) {
@@ -315,7 +315,7 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
   }
 }
 
-// (c, issue 15 item 4) ~reset clears the last stamp (and the path): a frame older than the
+// (c) ~reset clears the last stamp (and the path): a frame older than the
 // last one is processed after it, in a new segment. A stamp jumping back by more than
 // ~time_jump_threshold (1 s) restarts the SLAM by itself; a small step back is still dropped.
 TEST_F(BadInput, ResetAndTimeJumpsStartNewSegments) {
@@ -365,7 +365,7 @@ TEST_F(BadInput, ResetAndTimeJumpsStartNewSegments) {
   for (const auto& m : status.messages()) EXPECT_GT(std::abs(m->header.stamp.toSec() - (t0 + 9.2)), 1e-3);
 }
 
-// (d, issue 7) ~trajectory_file and ~map_file (the PLY export, now also
+// (d) ~trajectory_file and ~map_file (the PLY export, now also
 // ~export_points) are written when the tracking
 // nodelet goes away, as on SIGINT of its manager: loaded in this process with a
 // nodelet::Loader, fed the test bag's images, then unloaded.
@@ -441,7 +441,7 @@ TEST(ShutdownSave, TrajectoryAndMapWrittenOnUnload) {
   EXPECT_NE(ply_text.find("end_header\n"), std::string::npos);
 }
 
-// (d, issue 15 item 8) Unloading while the SLAM thread holds a frame (~debug_frame_delay 30 s),
+// (d) Unloading while the SLAM thread holds a frame (~debug_frame_delay 30 s),
 // its queue is full and the image callback waits on it: the nodelet stops its threads in order
 // (queue closed, callback woken, subscription shut down, SLAM thread joined) and saves, without
 // waiting for the held or the queued frames. Three rounds (an unload crash was intermittent).

@@ -1,4 +1,4 @@
-// Threads.* (threads.test, issue 15 item 8): the SLAM runs on its own thread fed by a bounded
+// Threads.* (threads.test): the SLAM runs on its own thread fed by a bounded
 // queue. The trackers hold every frame ~debug_frame_delay (D) seconds before processing it, so
 // after the status of frame k, frame k+1 is in progress for at least D and the later ones wait:
 //  - bag mode: ~save_trajectory and dynamic_reconfigure return within D/2 while frames wait

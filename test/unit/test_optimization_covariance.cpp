@@ -1,4 +1,4 @@
-// BaOptions::compute_covariance (issue 15, item 5): the free cameras' 6x6 covariance after the
+// BaOptions::compute_covariance: the free cameras' 6x6 covariance after the
 // points are eliminated, checked against (a) a dense reference built here from numerical
 // Jacobians of every residual (all free cameras and points at once, no Schur complement) and
 // (b) the spread of the solution over noise draws (Monte Carlo), which checks the scaling by

@@ -1,4 +1,4 @@
-// The ROS layer's conversions on bad input (issue 7), without a ROS master:
+// The ROS layer's conversions on bad input, without a ROS master:
 // every image encoding the nodelet may receive (converted or rejected with a
 // message), malformed image messages, camera_info, and the finiteness checks
 // the publishing path relies on (tf, pose, odometry, clouds never carry NaN).
@@ -237,7 +237,7 @@ TEST(RosConversions, CloudsHoldExactlyThePointsGiven) {
 }
 
 
-// Issue 15, item 2: a rectified stream takes P and no distortion; rational_polynomial is
+// A rectified stream takes P and no distortion; rational_polynomial is
 // refused when k4..k6 are not zero; binning and ROI give the image's own intrinsics.
 TEST(RosConversions, CameraInfoRectifiedRationalBinningAndRoi) {
   using vitamin_e::camera::DistortionModel;

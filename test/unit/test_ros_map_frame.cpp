@@ -1,5 +1,5 @@
 // The ROS layer's map frame, gravity window, covariance re-expression, trajectory segments
-// and diagnostics levels (issue 15), without a ROS master.
+// and diagnostics levels, without a ROS master.
 #include <gtest/gtest.h>
 
 #include <cmath>

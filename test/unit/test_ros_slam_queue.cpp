@@ -1,4 +1,4 @@
-// The tracking nodelet's SLAM queue (issue 15, item 8), without a ROS master: the live queue
+// The tracking nodelet's SLAM queue, without a ROS master: the live queue
 // keeps the newest frame, the bag queue blocks its producer, commands go before frames,
 // close() wakes everyone and the work already posted still runs. Waits are on events (a
 // thread's progress), never on sleeps.

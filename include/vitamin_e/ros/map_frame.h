@@ -1,5 +1,5 @@
 #pragma once
-// The published map frame (issue 15, item 1). The SLAM core keeps its world frame w: the
+// The published map frame. The SLAM core keeps its world frame w: the
 // first reference camera's optical frame (z forward, y down), arbitrary scale. The ROS layer
 // publishes everything in a map frame fixed once per SLAM run, T_map_w, chosen from (best
 // first) gravity measured by an IMU, the robot's base frame, or the first camera's axes.

@@ -1,5 +1,5 @@
 #pragma once
-// The tracking nodelet's hand-over to its SLAM thread (issue 15, item 8): frames in a bounded
+// The tracking nodelet's hand-over to its SLAM thread: frames in a bounded
 // queue, and commands (work of a service: reset, map export) that the SLAM thread runs
 // between two frames, before any waiting frame.
 //   live (drop_oldest): push() never blocks; a frame arriving at a full queue pushes out the
