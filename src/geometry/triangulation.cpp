@@ -51,11 +51,13 @@ TriangulationResult triangulatePoint(const std::vector<Eigen::Isometry3d>& T_w_c
   TriangulationResult res;
   const int n = static_cast<int>(T_w_c.size());
   if (n < 2 || static_cast<int>(xy.size()) != n) {
+    res.failed = TriangulationCheck::kViews;
     res.reason = "need at least two views with one observation each";
     return res;
   }
   Eigen::Vector3d p;
   if (!triangulateDlt(T_w_c, xy, &p)) {
+    res.failed = TriangulationCheck::kLinear;
     res.reason = "linear triangulation failed (point at infinity)";
     return res;
   }
@@ -115,10 +117,13 @@ TriangulationResult triangulatePoint(const std::vector<Eigen::Isometry3d>& T_w_c
       res.parallax_deg = std::max(res.parallax_deg, parallaxDeg(T_w_c[a].translation(), T_w_c[b].translation(), p));
 
   if (!res.cheirality_ok) {
+    res.failed = TriangulationCheck::kCheirality;
     res.reason = "cheirality: point behind a camera";
   } else if (res.parallax_deg < config.min_parallax_deg) {
+    res.failed = TriangulationCheck::kParallax;
     res.reason = "parallax too small";
   } else if (max_err > config.max_reproj_error_px) {
+    res.failed = TriangulationCheck::kReprojection;
     res.reason = "reprojection error too large";
   } else {
     res.ok = true;

@@ -11,6 +11,18 @@
 
 namespace vitamin_e::pipeline {
 
+namespace {
+// The keys of FrameDiagnostics::triangulation_rejected_by.
+const char* rejectionName(geometry::TriangulationCheck failed) {
+  switch (failed) {
+    case geometry::TriangulationCheck::kCheirality: return "cheirality";
+    case geometry::TriangulationCheck::kParallax: return "parallax";
+    case geometry::TriangulationCheck::kReprojection: return "reprojection";
+    default: return "other";
+  }
+}
+}  // namespace
+
 Mapper::Mapper(const SystemConfig& config, const camera::Camera& camera) : config_(config), camera_(camera) {}
 
 FrameRefinement Mapper::refineFrame(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
@@ -223,12 +235,7 @@ Triangulation Mapper::triangulate(const FrameContext& frame, const map::Map& map
     if (poses.size() < 2) continue;
     geometry::TriangulationResult tr = geometry::triangulatePoint(poses, obs, config_.triangulation);
     if (!tr.ok) {
-      // The checks of triangulatePoint, in its order (no errors: the linear solution failed).
-      const char* why = tr.reproj_error_px.empty()                                 ? "other"
-                        : !tr.cheirality_ok                                        ? "cheirality"
-                        : tr.parallax_deg < config_.triangulation.min_parallax_deg ? "parallax"
-                                                                                   : "reprojection";
-      ++out.rejected_by[why];
+      ++out.rejected_by[rejectionName(tr.failed)];
       continue;
     }
     map::NewLandmark l;

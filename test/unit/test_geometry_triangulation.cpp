@@ -52,13 +52,14 @@ TEST(Triangulation, RejectsSmallParallaxAndPointsBehind) {
   const TriangulationResult r = triangulatePoint(T, {observe(T[0], p_w), observe(T[1], p_w)}, cfg);
   EXPECT_FALSE(r.ok);
   EXPECT_LT(r.parallax_deg, 1.0);
-  EXPECT_EQ(r.reason, "parallax too small");
+  EXPECT_EQ(r.failed, TriangulationCheck::kParallax) << r.reason;
 
   // Rays that meet behind the cameras.
   const std::vector<Eigen::Isometry3d> T2 = {pose({0, 0, 0}, {0, 0, 0}), pose({1.0, 0, 0}, {0, 0, 0})};
   const TriangulationResult rb = triangulatePoint(T2, {Eigen::Vector2d(0.1, 0.0), Eigen::Vector2d(0.3, 0.0)}, cfg);
   EXPECT_FALSE(rb.ok);
   EXPECT_FALSE(rb.cheirality_ok);
+  EXPECT_EQ(rb.failed, TriangulationCheck::kCheirality) << rb.reason;
 }
 
 TEST(Triangulation, ConfigValidation) {

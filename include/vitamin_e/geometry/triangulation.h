@@ -19,9 +19,20 @@ struct TriangulationConfig {
   void validate() const;  // throws std::invalid_argument naming the key
 };
 
+// The check a triangulation failed, in the order they are made.
+enum class TriangulationCheck {
+  kNone,          // ok
+  kViews,         // fewer than two views, or observations not one per view
+  kLinear,        // the linear solution is at infinity
+  kCheirality,    // behind a camera
+  kParallax,      // the rays' widest angle is below min_parallax_deg
+  kReprojection,  // a view reprojects beyond max_reproj_error_px
+};
+
 struct TriangulationResult {
   bool ok = false;
-  std::string reason;  // empty when ok
+  TriangulationCheck failed = TriangulationCheck::kNone;
+  std::string reason;  // the failed check in words; empty when ok
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   double parallax_deg = 0.0;            // largest angle between two viewing rays at p_w
   std::vector<double> reproj_error_px;  // per view, at p_w
