@@ -1,4 +1,4 @@
-// Driving-like motion end to end (issue 14, item 4): the SLAM on the project's
+// Driving-like motion end to end: the SLAM on the project's
 // street scene driven like KITTI 07 (driving_clip.h, 10 Hz).
 //   turn: 10 m straight slowing from 3 to 2 m/s, a 90-degree left turn at an
 //         intersection at walking speed (up to 3 degrees and 0.2 m per frame),
@@ -7,14 +7,10 @@
 //         (1.5 m per frame): 99 frames, 103.5 m, 613x185.
 //   drive, frames 200-259: the end of an 8.5 m/s straight and the braking
 //         before a right turn, past parked cars: 60 frames, 37 m, 1226x370.
-// config/kitti.yaml, scaled to the image size. The bounds are what a correct
-// monocular SLAM reaches on exact, rectified renders (2% of the path), not
-// what the code of the day gives. When these tests were written, turn and fast
-// passed with a wide margin (no re-initialization, ATE 4.8 cm and 18 cm, 0.17%
-// of the path) while the system re-initialized 3 times in the 160 frames of
-// the real KITTI 07: those clips do not reproduce that loss, they guard the
-// driving motion. The drive clip fails (a silent scale jump, no loss): its
-// test is DISABLED_ until the SLAM is fixed.
+// config/kitti.yaml, scaled to the image size. The ATE bounds are 1.5x what the
+// system measures on these exact, rectified renders, so that a regression to
+// twice the error fails. The drive clip fails (a silent scale jump, no loss):
+// its test is DISABLED_ until the SLAM is fixed.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -110,14 +106,14 @@ void expectTracksEveryFrameAfterAnEarlyInit(const std::string& name, long long i
   EXPECT_EQ(r.init_retries, 0);
 }
 
-// Sim(3) ATE below 2% of the path, and the scale right all along, not only on
+// Sim(3) ATE below max_ate_m, and the scale right all along, not only on
 // average: after the one Sim(3), the distance covered in each third of the
 // matched frames is the true one within 10% (scale drift and jumps show here).
-void expectSmallAteAndSteadyScale(const std::string& name) {
+void expectSmallAteAndSteadyScale(const std::string& name, double max_ate_m) {
   report(name);
   ASSERT_GE(run(name).estimate.size(), 3u) << "no trajectory";
   const auto e = evaluate(name);
-  EXPECT_LT(e.ate.rmse, 0.02 * clip(name).path_length_m);
+  EXPECT_LT(e.ate.rmse, max_ate_m);
   EXPECT_GE(e.success_rate, 0.75);
   ASSERT_GE(e.pairs.size(), 9u);
   const std::size_t n = e.pairs.size();
@@ -142,8 +138,7 @@ TEST(SystemDriving, TurnAtWalkingSpeedAteIsSmallAfterSim3Alignment) {
   report("turn");
   ASSERT_GE(run("turn").estimate.size(), 3u) << "no trajectory";
   const auto e = evaluate("turn");
-  // 2% of 28.4 m: 57 cm.
-  EXPECT_LT(e.ate.rmse, 0.02 * clip("turn").path_length_m);
+  EXPECT_LT(e.ate.rmse, 0.033);     // measured 2.2 cm over 28.4 m
   EXPECT_GE(e.success_rate, 0.75);  // the map built within the first 30 frames, then every frame
 }
 
@@ -153,8 +148,8 @@ TEST(SystemDriving, FastStraightTracksEveryFrameWithoutReinitializing) {
 }
 
 TEST(SystemDriving, FastStraightAteIsSmallAndScaleHoldsAfterSim3Alignment) {
-  // 2% of 103.5 m: 2.07 m; the speed triples over the clip.
-  expectSmallAteAndSteadyScale("fast");
+  // Measured 18.8 cm over 103.5 m; the speed triples over the clip.
+  expectSmallAteAndSteadyScale("fast", 0.28);
 }
 
 // Fails today: every frame is tracked without re-initializing, but the scale
@@ -166,7 +161,7 @@ TEST(SystemDriving, FastStraightAteIsSmallAndScaleHoldsAfterSim3Alignment) {
 // same (1.70 m). The town of seeds 1-3 and the half-size images do not show it.
 TEST(SystemDriving, DISABLED_DriveFastPastParkedCarsKeepsItsScale) {
   expectTracksEveryFrameAfterAnEarlyInit("drive", 10);
-  expectSmallAteAndSteadyScale("drive");
+  expectSmallAteAndSteadyScale("drive", 0.02 * clip("drive").path_length_m);
 }
 
 // The clips themselves (always on): the motion is what the tests above claim.
@@ -194,8 +189,9 @@ TEST(SystemDriving, GroundPlaneMeasuresTheTrueCameraHeight) {
 
 // The scale corrections move the map, the relocalization index and the motion
 // model together: forced on every keyframe (no tolerance, the whole error at
-// once), they leave the turn tracked on every frame, without re-initializing, and
-// as accurate as the bound of the clip.
+// once), they leave the turn tracked on every frame, without re-initializing; the ATE
+// (measured 15 cm, against 2.2 cm with the default ground settings: the map moves at every
+// keyframe) is bounded at 1.5x that.
 TEST(SystemDriving, ScaleCorrectionsOnEveryKeyframeKeepTheTurnTracked) {
   ve::pipeline::SystemConfig config = ve::test::drivingConfig();
   config.ground.tolerance = 0.0;
@@ -212,7 +208,7 @@ TEST(SystemDriving, ScaleCorrectionsOnEveryKeyframeKeepTheTurnTracked) {
   eval.frames = clip("turn").images.size();
   const auto e = ve::eval::evaluate(r.estimate, clip("turn").ground_truth, eval);
   std::printf("[driving turn, corrected every keyframe] %d corrections, Sim(3) ATE %.3f m\n", corrected, e.ate.rmse);
-  EXPECT_LT(e.ate.rmse, 0.02 * clip("turn").path_length_m);
+  EXPECT_LT(e.ate.rmse, 0.225);
 }
 
 TEST(SystemDriving, ClipsHaveTheClaimedMotion) {

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -98,11 +99,13 @@ void expectAccurate(std::uint64_t scene_seed) {
   ve::eval::EvalConfig cfg;
   cfg.frames = kFrames;
   const ve::eval::EvalResult r = ve::eval::evaluate(run.estimate, run.ground_truth, cfg);
-  // Measured: 0.1-0.2 cm RMSE, at most 0.4 cm (seeds 1-12). With the twisted
-  // motion, tens of centimetres. 1 cm / 2 cm leave a 5x margin.
+  std::printf("[planar wall, scene seed %llu] ATE rmse %.4f cm, max %.4f cm\n",
+              static_cast<unsigned long long>(scene_seed), 100.0 * r.ate.rmse, 100.0 * r.ate.max);
+  // Measured 0.076 and 0.101 cm RMSE, 0.15 and 0.22 cm max (seeds 11 and 3); with the twisted
+  // motion, tens of centimetres. The bounds are 1.5x the larger.
   EXPECT_GE(r.matched, static_cast<std::size_t>(0.8 * kFrames));
-  EXPECT_LT(r.ate.rmse, 0.01) << ve::eval::summary(r, cfg);
-  EXPECT_LT(r.ate.max, 0.02) << ve::eval::summary(r, cfg);
+  EXPECT_LT(r.ate.rmse, 0.0015) << ve::eval::summary(r, cfg);
+  EXPECT_LT(r.ate.max, 0.0034) << ve::eval::summary(r, cfg);
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Robustness of the SLAM system (issue 7): bad frames, bad timestamps, bad
+// Robustness of the SLAM system: bad frames, bad timestamps, bad
 // configuration files and hard content, each a case with a clear outcome and no
 // crash, hang, NaN or wild jump. Frames come from the project's own renderer
 // (textured room, figure-eight path) at 376x240 with the EuRoC camera scaled.
@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -371,7 +372,9 @@ TEST(Robustness, BlackoutOfTwoSecondsRelocalizesInTheSameMap) {
   for (int i = again; i < kBlackoutRunEnd; ++i) {
     EXPECT_TRUE(run.results[i].pose_valid) << "frame " << i << ": " << run.results[i].message;
   }
-  EXPECT_LT(wholeTrajectoryAte(run.system), 0.02);
+  const double ate = wholeTrajectoryAte(run.system);
+  std::printf("[blackout] whole-trajectory Sim(3) ATE %.4f cm\n", 100.0 * ate);
+  EXPECT_LT(ate, 0.0025);  // measured 0.169 cm: one frame and scale on both sides of the loss
   expectSaneOutput(run, 0.3);
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 
 #include "vitamin_e/eval/metrics.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
@@ -241,8 +242,11 @@ TEST(SystemSynthetic, PipelinedModeDeliversEveryFrameInOrderAndTracks) {
   ve::eval::EvalConfig cfg;
   cfg.frames = kFrames;
   const ve::eval::EvalResult r = ve::eval::evaluate(toEval(run.trajectory), run.ground_truth, cfg);
+  std::printf("[pipelined] ATE rmse %.4f cm\n", 100.0 * r.ate.rmse);
+  // Measured 0.045 cm: the sequential run's bound holds (the frame a dropped track ends at
+  // depends on the threads' timing, not the accuracy).
   EXPECT_GE(r.matched, static_cast<std::size_t>(0.8 * kFrames));
-  EXPECT_LT(r.ate.rmse, 0.01) << ve::eval::summary(r, cfg);
+  EXPECT_LT(r.ate.rmse, 0.00075) << ve::eval::summary(r, cfg);
 }
 
 int main(int argc, char** argv) {
