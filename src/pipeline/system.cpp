@@ -187,8 +187,12 @@ void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   // Motion model from the last localized in-between frame, if any.
   Eigen::Isometry3d T_prev_cur = Eigen::Isometry3d::Identity();
-  if (trajectory.size() >= 2) T_prev_cur = trajectory[trajectory.size() - 2].T_w_c.inverse() * T_w_c;
-  motion.restart(T_w_c, T_prev_cur);
+  double interval = std::nan("");
+  if (trajectory.size() >= 2) {
+    T_prev_cur = trajectory[trajectory.size() - 2].T_w_c.inverse() * T_w_c;
+    interval = frame.timestamp - trajectory[trajectory.size() - 2].timestamp;
+  }
+  motion.restart(T_w_c, T_prev_cur, frame.timestamp, interval);
   initialized_once = true;
   frame.lookup(map);
   relocalizer.addKeyframe(frame.image, frame, T_w_c);
@@ -289,7 +293,7 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
     if (l) map.markSeen(l->id, frame.frame_index);
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
-  motion.restart(T_w_c, Eigen::Isometry3d::Identity());
+  motion.restart(T_w_c, Eigen::Isometry3d::Identity(), frame.timestamp);
   if (!localization_only) {
     const KeyframeUpdate kf = mapper.addKeyframe(&frame, T_w_c, &map);
     d.keyframe = true;
@@ -319,12 +323,13 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
     ScopedTimer pose_timer(&timings, "pose", &result->timing_ms);
     // Accepted only when well constrained (enough inliers, and most of the
     // tracked map points agree): however many tracks a turn or a cut ended.
-    const PoseEstimate pose = localizer.estimate(frame, motion.predict(), &motion.lastPose());
+    const Eigen::Isometry3d predicted = motion.predict(frame.timestamp);  // across dropped frames too
+    const PoseEstimate pose = localizer.estimate(frame, predicted, &motion.lastPose());
     d.pose_points = pose.num_points;
     d.pose_inliers = pose.num_inliers;
     // Where the ended map tracks went: judged at the new pose, or at the
     // motion model's prediction when there is none.
-    diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : motion.predict(), &d);
+    diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : predicted, &d);
     if (pose.ok) endTracks(mapper.penalize(pose.outliers, &map), frame);
     if (pose.weak_kept) {
       result->message = "weak pose kept: " + std::to_string(pose.num_inliers) + " of " +
@@ -352,15 +357,16 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
     result->T_w_c_covariance_valid = refined.covariance_valid;
   }
   // A pose must be finite and must not jump: a step far beyond the scene depth
-  // is a failure, not motion.
+  // is a failure, not motion (after dropped frames: per frame interval).
   const double step = (T_w_c.translation() - motion.lastPose().translation()).norm();
-  if (!T_w_c.matrix().allFinite() || step > config.max_step_depth_ratio * scene_depth) {
+  const double max_step = config.max_step_depth_ratio * scene_depth * std::max(1.0, motion.stepRatio(frame.timestamp));
+  if (!T_w_c.matrix().allFinite() || step > max_step) {
     lose(frame, "pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")", false,
          result);
     return;
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
-  motion.update(T_w_c);
+  motion.update(T_w_c, frame.timestamp);
   {
     ScopedTimer timer(&timings, "map", &result->timing_ms);
     const KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
