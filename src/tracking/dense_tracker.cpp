@@ -528,7 +528,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   // New extrema where the grid has room.
   t = TimingClock::now();
   const int r = cfg.nms_radius_px;
-  auto markBlocked = [&](std::uint8_t v) {
+  auto mark_blocked = [&](std::uint8_t v) {
     for (const Track& tr : m.next_tracks) {
       const int x = static_cast<int>(std::lround(tr.uv.x())), y = static_cast<int>(std::lround(tr.uv.y()));
       for (int yy = std::max(0, y - r); yy <= std::min(gray.rows - 1, y + r); ++yy) {
@@ -537,10 +537,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       }
     }
   };
-  markBlocked(1);
+  mark_blocked(1);
   std::vector<Track> fresh;
   out.num_new = m.detect(gray, scale, &fresh);
-  markBlocked(0);
+  mark_blocked(0);
   m.next_tracks.insert(m.next_tracks.end(), fresh.begin(), fresh.end());
   out.timing_ms["detect"] = elapsedMs(t);
 
