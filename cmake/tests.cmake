@@ -23,6 +23,9 @@ if(CATKIN_ENABLE_TESTING)
   add_test(NAME script_results COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_results.sh)
   # ./scripts/step_ratio.py on made-up trajectories (seconds).
   add_test(NAME script_step_ratio COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_step_ratio.sh)
+  # ./scripts/bench_pipeline_report.py on made-up run folders (seconds).
+  add_test(NAME script_bench_pipeline_report
+           COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_bench_pipeline_report.sh)
   # Tests of the offline tools and the ROS layer (test/ros/*.test, test/tools/*.cpp).
   if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/cmake/ros_tests.cmake)
     include(cmake/ros_tests.cmake)

@@ -21,11 +21,13 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "cli.h"
 #include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/io/dataset.h"
+#include "vitamin_e/io/frame_prefetcher.h"
 #include "vitamin_e/io/run_report.h"
 #include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
@@ -57,8 +59,9 @@ const char* const kUsage =
     "  --stride N       process every Nth frame only (default 1): a camera that drops frames, or a\n"
     "                   slower frame rate, with the same images\n"
     "  --quiet          no progress and no summary\n"
-    "  --pipelined      tracking and mapping on two threads (frame k+1 is tracked while k is mapped);\n"
-    "                   default: sequential, deterministic\n"
+    "  --pipelined      tracking and mapping on two threads (frame k+1 is tracked while k is mapped),\n"
+    "                   images decoded ahead, frame meshes made on a thread of their own;\n"
+    "                   default: sequential, deterministic (one thread; the TSDF fusion has its own)\n"
     "  --log-frames     print one line per frame on stdout: index, time, state, tracks, mapped, ms,\n"
     "                   the frame's counters (see below), message\n"
     "  --print-config   print every SLAM parameter in force (defaults + --config), as a config file, and exit\n"
@@ -422,10 +425,15 @@ int run(const Options& o) {
     }
     addCounters(r, &stats);
     if (dense) {
-      // Per-frame mesh + NLTGV here; TSDF fusion runs on the mapper's own thread.
+      // Sequential: per-frame mesh + NLTGV here. Pipelined: on the dense mapper's
+      // meshing thread, off the SLAM's. TSDF fusion runs on the integrator's thread.
       pl::framePointsInCamera(r, &dense_ids, &dense_points);
-      const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
-      if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
+      if (o.pipelined) {
+        if (!dense_ids.empty()) dense->submitFrame(dense_ids, dense_points, r.T_w_c);
+      } else {
+        const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
+        if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
+      }
     }
     stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
     progress.update(stats.frames, stats.tracked_frames);
@@ -455,34 +463,83 @@ int run(const Options& o) {
                    o.localization_only ? " (localization only)" : "");
     }
   }
-  for (std::size_t i = o.start_frame; i < end && !g_stop; i += o.stride) {
-    ++attempted;
-    cv::Mat image;
-    const auto t_load = vitamin_e::TimingClock::now();
-    try {
-      image = dataset->loadImage(i);
-    } catch (const io::DatasetError& e) {
-      std::lock_guard<std::mutex> lock(result_mutex);
-      progress.warn(std::string(e.what()) + " (frame " + std::to_string(i) + " skipped)");
-      ++stats.skipped_frames;
-      continue;
+  // CPU time of each stage on its thread [ms, summed over the run]: stats.json cpu_ms.
+  double cpu_load = 0.0, cpu_tracking = 0.0, cpu_mapping = 0.0, cpu_mesh = 0.0;
+  auto skip_unreadable = [&](const std::string& why, std::size_t i) {
+    std::lock_guard<std::mutex> lock(result_mutex);
+    progress.warn(why + " (frame " + std::to_string(i) + " skipped)");
+    ++stats.skipped_frames;
+  };
+  if (pipelined) {
+    // The images are decoded ahead on a thread of their own.
+    io::FramePrefetcher ahead(*dataset, o.start_frame, end, o.stride, 3);
+    while (!g_stop) {
+      std::optional<io::PrefetchedFrame> f = ahead.next();
+      if (!f) break;
+      ++attempted;
+      cpu_load += f->load_cpu_ms;
+      if (f->image.empty()) {
+        skip_unreadable(f->error, f->index);
+        continue;
+      }
+      {
+        std::lock_guard<std::mutex> lock(result_mutex);
+        stats.timing.add("image_load", f->load_ms);
+      }
+      pipelined->submit(f->image, f->timestamp, f->timestamp_text);
     }
-    const double load_ms = vitamin_e::elapsedMs(t_load);
-    {
-      std::lock_guard<std::mutex> lock(result_mutex);
-      stats.timing.add("image_load", load_ms);
-    }
-    if (pipelined) {
-      pipelined->submit(image, dataset->timestamp(i), dataset->timestampText(i));
-    } else {
-      handle_result(sequential->process(image, dataset->timestamp(i), dataset->timestampText(i)));
+    pipelined->flush();
+    const pl::PipelinedSystem::StageCpu cpu = pipelined->stageCpuMs();
+    cpu_tracking = cpu.tracking_ms;
+    cpu_mapping = cpu.mapping_ms;
+  } else {
+    for (std::size_t i = o.start_frame; i < end && !g_stop; i += o.stride) {
+      ++attempted;
+      cv::Mat image;
+      const auto t_load = vitamin_e::TimingClock::now();
+      double cpu0 = vitamin_e::threadCpuMs();
+      try {
+        image = dataset->loadImage(i);
+      } catch (const io::DatasetError& e) {
+        skip_unreadable(e.what(), i);
+        continue;
+      }
+      stats.timing.add("image_load", vitamin_e::elapsedMs(t_load));
+      cpu_load += vitamin_e::threadCpuMs() - cpu0;
+      // process() is mapFrame(trackFrame()): the two stages timed apart.
+      cpu0 = vitamin_e::threadCpuMs();
+      pl::TrackedFrame tracked = sequential->trackFrame(image, dataset->timestamp(i), dataset->timestampText(i));
+      const double cpu1 = vitamin_e::threadCpuMs();
+      cpu_tracking += cpu1 - cpu0;
+      const pl::FrameResult result = sequential->mapFrame(std::move(tracked));
+      const double cpu2 = vitamin_e::threadCpuMs();
+      cpu_mapping += cpu2 - cpu1;
+      handle_result(result);
+      cpu_mesh += vitamin_e::threadCpuMs() - cpu2;
     }
   }
-  if (pipelined) pipelined->flush();
+  // The run ends when the dense reconstruction has caught up with the SLAM.
+  if (dense) dense->flush();
   const pl::System& system = pipelined ? pipelined->system() : *sequential;
   progress.finish(attempted, stats.tracked_frames);
   stats.interrupted = g_stop != 0;
   stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
+  if (dense) {
+    const vitamin_e::fusion::DenseWorkStats work = dense->workStats();
+    for (double ms : work.frame_mesh_ms) stats.timing.add("mesh", ms);
+    cpu_mesh += work.mesh_cpu_ms;
+    const vitamin_e::fusion::TsdfIntegratorStats fused = dense->integratorStats();
+    stats.dense_fused = fused.integrated;
+    stats.dense_dropped = fused.dropped;
+    if (fused.integrated > 0) stats.cpu_ms["tsdf"] = fused.integration_cpu_ms;
+    if (o.pipelined) stats.cpu_ms["mesh"] = cpu_mesh;
+  }
+  stats.cpu_ms["image_load"] = cpu_load;
+  stats.cpu_ms["tracking"] = cpu_tracking;
+  stats.cpu_ms["mapping"] = cpu_mapping;
+  // Sequential: the mesh is made on the main thread, in the result handler (with the stats' bookkeeping).
+  if (!o.pipelined && dense) stats.cpu_ms["mesh"] = cpu_mesh;
+  for (auto& [stage, ms] : stats.cpu_ms) ms /= static_cast<double>(std::max<std::size_t>(1, stats.frames));
   stats.init_retries = system.initRetries();
   stats.relocalizations = system.relocalizations();
   // Frames seen while initializing are localized once the map exists: the

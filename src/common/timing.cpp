@@ -3,6 +3,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <numeric>
 
@@ -18,6 +19,12 @@ double threadCpuMs() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+double frameGapRatio(double gap_s, double interval_s) {
+  if (!std::isfinite(gap_s) || !std::isfinite(interval_s) || !(gap_s > 0.0) || !(interval_s > 0.0)) return 1.0;
+  const double r = gap_s / interval_s;
+  return r <= kSteadyRateTolerance && r * kSteadyRateTolerance >= 1.0 ? 1.0 : r;
 }
 
 double percentile(std::vector<double> values, double pct) {

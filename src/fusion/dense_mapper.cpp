@@ -1,5 +1,6 @@
 #include "vitamin_e/fusion/dense_mapper.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "vitamin_e/common/timing.h"
@@ -52,25 +53,99 @@ DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, con
   return stats;
 }
 
-void DenseMapper::flush() { integrator_->flush(); }
+DenseMapper::~DenseMapper() {
+  {
+    std::lock_guard<std::mutex> lock(work_mutex_);
+    stop_ = true;
+  }
+  work_cv_.notify_all();
+  if (mesher_thread_.joinable()) mesher_thread_.join();
+}
+
+void DenseMapper::submitFrame(std::vector<std::uint64_t> ids, std::vector<Eigen::Vector3d> p_c,
+                              const Eigen::Isometry3d& T_w_c, std::size_t max_waiting) {
+  if (ids.size() != p_c.size()) throw std::invalid_argument("DenseMapper::submitFrame: ids and points differ in size");
+  std::unique_lock<std::mutex> lock(work_mutex_);
+  if (!mesher_thread_.joinable()) mesher_thread_ = std::thread([this] { meshLoop(); });
+  done_cv_.wait(lock, [&] { return work_.size() < std::max<std::size_t>(1, max_waiting); });
+  work_.push_back(Submitted{std::move(ids), std::move(p_c), T_w_c});
+  ++work_stats_.submitted;
+  work_cv_.notify_one();
+}
+
+void DenseMapper::meshLoop() {
+  for (;;) {
+    Submitted job;
+    {
+      std::unique_lock<std::mutex> lock(work_mutex_);
+      work_cv_.wait(lock, [this] { return stop_ || !work_.empty(); });
+      if (work_.empty()) return;  // stopped and nothing left
+      job = std::move(work_.front());
+      work_.pop_front();
+      working_ = true;
+    }
+    done_cv_.notify_all();
+    const double cpu0 = threadCpuMs();
+    const DenseFrameStats s = addFrame(job.ids, job.p_c, job.T_w_c);
+    const double cpu = threadCpuMs() - cpu0;
+    {
+      std::lock_guard<std::mutex> lock(work_mutex_);
+      working_ = false;
+      work_stats_.mesh_cpu_ms += cpu;
+      if (s.integrated) {
+        ++work_stats_.meshed;
+        work_stats_.mesh_ms += s.mesh_ms + s.denoise_ms;
+        work_stats_.frame_mesh_ms.push_back(s.mesh_ms + s.denoise_ms);
+      }
+    }
+    done_cv_.notify_all();
+  }
+}
+
+void DenseMapper::waitMeshed() {
+  std::unique_lock<std::mutex> lock(work_mutex_);
+  done_cv_.wait(lock, [this] { return work_.empty() && !working_; });
+}
+
+DenseWorkStats DenseMapper::workStats() const {
+  std::lock_guard<std::mutex> lock(work_mutex_);
+  return work_stats_;
+}
+
+void DenseMapper::flush() {
+  waitMeshed();
+  integrator_->flush();
+}
 
 TriangleMesh DenseMapper::extractMesh() {
-  integrator_->flush();
+  flush();
   return integrator_->extractMesh();
 }
 
 bool DenseMapper::saveMesh(const std::string& path, std::string* error) {
-  integrator_->flush();
+  flush();
   return integrator_->saveMesh(path, error);
 }
 
-bool DenseMapper::saveTsdf(const std::string& path, std::string* error) { return integrator_->saveVolume(path, error); }
+bool DenseMapper::saveTsdf(const std::string& path, std::string* error) {
+  waitMeshed();
+  return integrator_->saveVolume(path, error);
+}
 
-void DenseMapper::loadTsdf(const std::string& path) { integrator_->loadVolume(path); }
+void DenseMapper::loadTsdf(const std::string& path) {
+  waitMeshed();
+  integrator_->loadVolume(path);
+}
 
 TsdfIntegratorStats DenseMapper::integratorStats() const { return integrator_->stats(); }
 
 void DenseMapper::reset() {
+  {
+    std::lock_guard<std::mutex> lock(work_mutex_);
+    work_.clear();
+  }
+  done_cv_.notify_all();
+  waitMeshed();
   integrator_->reset();
   denoiser_.reset();
 }

@@ -27,14 +27,18 @@ TsdfIntegrator::~TsdfIntegrator() {
 
 void TsdfIntegrator::integrateJob(const Job& job) {
   const auto t0 = TimingClock::now();
+  const double cpu0 = threadCpuMs();
   {
     std::lock_guard<std::mutex> lock(volume_mutex_);
     volume_.integrate(job.mesh, job.T_w_c, job.image);
   }
+  const double cpu = threadCpuMs() - cpu0;
   const double ms = elapsedMs(t0);
   std::lock_guard<std::mutex> lock(queue_mutex_);
   ++stats_.integrated;
   stats_.last_integration_ms = ms;
+  stats_.integration_ms += ms;
+  stats_.integration_cpu_ms += cpu;
 }
 
 void TsdfIntegrator::submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c,

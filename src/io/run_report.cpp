@@ -131,6 +131,16 @@ std::string toJson(const RunStats& s) {
        << "}";
   }
   os << (stages.empty() ? "" : "\n  ") << "},\n";
+  os << "  \"cpu_ms\": {";
+  {
+    bool first = true;
+    for (const auto& [stage, ms] : s.cpu_ms) {
+      os << (first ? "" : ",") << "\n    " << jsonString(stage) << ": " << number(ms);
+      first = false;
+    }
+    os << (first ? "" : "\n  ") << "},\n";
+  }
+  os << "  \"dense\": {\"fused\": " << s.dense_fused << ", \"dropped\": " << s.dense_dropped << "},\n";
   const double fps = s.wall_time_s > 0.0 ? static_cast<double>(s.frames) / s.wall_time_s : 0.0;
   os << "  \"wall_time_s\": " << number(s.wall_time_s) << ",\n";
   os << "  \"fps\": " << number(fps) << ",\n";

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "vitamin_e/common/timing.h"
 
 namespace vitamin_e::pipeline {
 
@@ -40,12 +41,18 @@ bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::
 void PipelinedSystem::trackingLoop() {
   while (std::optional<Input> in = input_.pop()) {
     TrackedFrame frame;
+    const double cpu0 = threadCpuMs();
     try {
       frame = system_->trackFrame(in->image, in->timestamp, in->timestamp_text);
     } catch (const std::exception& e) {
       frame.skipped = true;
       frame.timestamp = in->timestamp;
       frame.message = std::string("frame skipped: ") + e.what();
+    }
+    const double cpu = threadCpuMs() - cpu0;
+    {
+      std::lock_guard<std::mutex> lock(count_mutex_);
+      cpu_.tracking_ms += cpu;
     }
     tracked_.push(std::move(frame));
   }
@@ -54,9 +61,12 @@ void PipelinedSystem::trackingLoop() {
 
 void PipelinedSystem::mappingLoop() {
   while (std::optional<TrackedFrame> frame = tracked_.pop()) {
+    const double cpu0 = threadCpuMs();
     FrameResult result = system_->mapFrame(std::move(*frame));
+    const double cpu = threadCpuMs() - cpu0;
     if (on_result_) on_result_(std::move(result));
     std::lock_guard<std::mutex> lock(count_mutex_);
+    cpu_.mapping_ms += cpu;
     ++finished_;
     idle_cv_.notify_all();
   }
@@ -65,6 +75,11 @@ void PipelinedSystem::mappingLoop() {
 void PipelinedSystem::flush() {
   std::unique_lock<std::mutex> lock(count_mutex_);
   idle_cv_.wait(lock, [&] { return finished_ >= submitted_; });
+}
+
+PipelinedSystem::StageCpu PipelinedSystem::stageCpuMs() const {
+  std::lock_guard<std::mutex> lock(count_mutex_);
+  return cpu_;
 }
 
 std::size_t PipelinedSystem::droppedFrames() const {

@@ -235,8 +235,12 @@ Eigen::Isometry3d System::Impl::localizeInitialFrames(const InitialMap& m, const
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   // Motion model from the last localized in-between frame, if any.
   Eigen::Isometry3d T_prev_cur = Eigen::Isometry3d::Identity();
-  if (trajectory.size() >= 2) T_prev_cur = trajectory[trajectory.size() - 2].T_w_c.inverse() * T_w_c;
-  motion.restart(T_w_c, T_prev_cur);
+  double interval = std::nan("");
+  if (trajectory.size() >= 2) {
+    T_prev_cur = trajectory[trajectory.size() - 2].T_w_c.inverse() * T_w_c;
+    interval = frame.timestamp - trajectory[trajectory.size() - 2].timestamp;
+  }
+  motion.restart(T_w_c, T_prev_cur, frame.timestamp, interval);
   initialized_once = true;
   return T_w_c;
 }
@@ -324,7 +328,7 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
   result->T_w_c_covariance_valid = refined.covariance_valid;
   markTracksSeen(frame);
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
-  motion.restart(T_w_c, Eigen::Isometry3d::Identity());
+  motion.restart(T_w_c, Eigen::Isometry3d::Identity(), frame.timestamp);
   if (!localization_only) T_w_c = insertKeyframe(frame, T_w_c, &d);
   result->pose_valid = true;
   result->T_w_c = T_w_c;
@@ -352,15 +356,16 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
     result->T_w_c_covariance_valid = refined.covariance_valid;
   }
   // A pose must be finite and must not jump: a step far beyond the scene depth
-  // is a failure, not motion.
+  // is a failure, not motion (after dropped frames: per frame interval).
   const double step = (T_w_c.translation() - motion.lastPose().translation()).norm();
-  if (!T_w_c.matrix().allFinite() || step > config.max_step_depth_ratio * scene_depth) {
+  const double max_step = config.max_step_depth_ratio * scene_depth * std::max(1.0, motion.stepRatio(frame.timestamp));
+  if (!T_w_c.matrix().allFinite() || step > max_step) {
     lose(frame, RecoveryEvent::kPoseJumped,
          "pose jumped by " + std::to_string(step) + " (scene depth " + std::to_string(scene_depth) + ")", result);
     return;
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
-  motion.update(T_w_c);
+  motion.update(T_w_c, frame.timestamp);
   {
     ScopedTimer timer(&timings, "map", &result->timing_ms);
     T_w_c = extendMap(frame, T_w_c, &result->diagnostics);
@@ -375,12 +380,13 @@ PoseEstimate System::Impl::estimatePose(const FrameContext& frame, const EndedTr
   FrameDiagnostics& d = result->diagnostics;
   // Accepted only when well constrained (enough inliers, and most of the
   // tracked map points agree): however many tracks a turn or a cut ended.
-  PoseEstimate pose = localizer.estimate(frame, map, motion.predict(), &motion.lastPose());
+  const Eigen::Isometry3d predicted = motion.predict(frame.timestamp);  // across dropped frames too
+  PoseEstimate pose = localizer.estimate(frame, map, predicted, &motion.lastPose());
   d.pose_points = pose.num_points;
   d.pose_inliers = pose.num_inliers;
   // Where the ended map tracks went: judged at the new pose, or at the
   // motion model's prediction when there is none.
-  diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : motion.predict(), &d);
+  diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : predicted, &d);
   if (pose.ok) penalize(pose.outliers);
   if (pose.weak_kept) {
     result->message = "weak pose kept: " + std::to_string(pose.num_inliers) + " of " + std::to_string(pose.num_points) +

@@ -90,6 +90,17 @@ struct DenseTracker::Impl {
   float patch_gain = 1.f;      // this frame's median contrast gain of the patch alignment
   std::vector<float> ratios;   // scratch of frameStrengthRatio / alignSteps
 
+  // The frame rate: after dropped frames the tracks' parallax step is longer.
+  double last_t = std::nan("");         // stamp of the previous frame [s]
+  double last_interval = std::nan("");  // the gap before it [s]
+  float parallax_scale = 1.f;           // this frame's gap over that one (frameGapRatio)
+
+  // A track's predicted parallax step: its last residual to the dominant flow,
+  // scaled to this frame's gap.
+  Eigen::Vector2f parallaxOf(const Track& t) const {
+    return cfg.predict_parallax ? Eigen::Vector2f(parallax_scale * t.resid) : Eigen::Vector2f::Zero();
+  }
+
   explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
 
   void trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale);
@@ -121,7 +132,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.climbed = false;
       s.fail = kLossClimb;
       ClimbParams fwd{t.sign, static_cast<float>(cfg.lambda) * scale, sigma2, cfg.max_climb_steps, 2};
-      const Eigen::Vector2f r = cfg.predict_parallax ? t.resid : Eigen::Vector2f::Zero();
+      const Eigen::Vector2f r = parallaxOf(t);
       const Eigen::Vector2f pred = Af * t.uv + bf + r;
       s.pred = pred;
       if (!hillClimb(kappa, pred, fwd, &s.px)) continue;
@@ -183,7 +194,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.fail = kLossFlat;
       if (min_sharp > 0.f && peakSharpness(kappa, s.px, t.sign) < min_sharp) continue;
       // Backward: climb the previous curvature from the inverse prediction.
-      const Eigen::Vector2f r = cfg.predict_parallax ? t.resid : Eigen::Vector2f::Zero();
+      const Eigen::Vector2f r = parallaxOf(t);
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
       Eigen::Vector2i q;
       s.fail = kLossBackClimb;
@@ -376,6 +387,9 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   out.timestamp = timestamp;
   if (m.has_prev && gray.size() != m.size) reset();
   m.size = gray.size();
+  m.parallax_scale = m.has_prev ? static_cast<float>(frameGapRatio(timestamp - m.last_t, m.last_interval)) : 1.f;
+  m.last_interval = m.has_prev ? timestamp - m.last_t : std::nan("");
+  m.last_t = timestamp;
 
   auto t = TimingClock::now();
   double sigma = cfg.smoothing_sigma;
@@ -447,7 +461,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       ys.reserve(m.tracks.size());
       for (size_t i = 0; i < m.tracks.size(); ++i) {
         if (!m.steps[i].ok) continue;
-        const Eigen::Vector2f r = cfg.predict_parallax ? m.tracks[i].resid : Eigen::Vector2f::Zero();
+        const Eigen::Vector2f r = m.parallaxOf(m.tracks[i]);
         xs.push_back(m.tracks[i].uv.cast<double>());
         ys.push_back((m.steps[i].uv - r).cast<double>());
       }
@@ -514,7 +528,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   // New extrema where the grid has room.
   t = TimingClock::now();
   const int r = cfg.nms_radius_px;
-  auto markBlocked = [&](std::uint8_t v) {
+  auto mark_blocked = [&](std::uint8_t v) {
     for (const Track& tr : m.next_tracks) {
       const int x = static_cast<int>(std::lround(tr.uv.x())), y = static_cast<int>(std::lround(tr.uv.y()));
       for (int yy = std::max(0, y - r); yy <= std::min(gray.rows - 1, y + r); ++yy) {
@@ -523,10 +537,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
       }
     }
   };
-  markBlocked(1);
+  mark_blocked(1);
   std::vector<Track> fresh;
   out.num_new = m.detect(gray, scale, &fresh);
-  markBlocked(0);
+  mark_blocked(0);
   m.next_tracks.insert(m.next_tracks.end(), fresh.begin(), fresh.end());
   out.timing_ms["detect"] = elapsedMs(t);
 

@@ -2,6 +2,7 @@
 // bookkeeping (what it records and where; never how long anything took).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -19,6 +20,18 @@ TEST(Percentile, InterpolatesLinearly) {
   EXPECT_DOUBLE_EQ(percentile({0.0, 10.0}, 95.0), 9.5);
   EXPECT_DOUBLE_EQ(percentile({5.0, 1.0}, 0.0), 1.0);
   EXPECT_DOUBLE_EQ(percentile({5.0, 1.0}, 100.0), 5.0);
+}
+
+TEST(FrameGapRatio, OneAtASteadyRateTheGapAfterDroppedFrames) {
+  EXPECT_EQ(vitamin_e::frameGapRatio(0.05, 0.05), 1.0);
+  EXPECT_EQ(vitamin_e::frameGapRatio(0.0599, 0.05), 1.0);  // jitter within the tolerance
+  EXPECT_EQ(vitamin_e::frameGapRatio(0.0401, 0.05), 1.0);
+  EXPECT_DOUBLE_EQ(vitamin_e::frameGapRatio(0.1, 0.05), 2.0);
+  EXPECT_DOUBLE_EQ(vitamin_e::frameGapRatio(0.15, 0.05), 3.0);
+  EXPECT_DOUBLE_EQ(vitamin_e::frameGapRatio(0.05, 0.15), 1.0 / 3.0);
+  EXPECT_EQ(vitamin_e::frameGapRatio(std::nan(""), 0.05), 1.0);
+  EXPECT_EQ(vitamin_e::frameGapRatio(0.1, 0.0), 1.0);
+  EXPECT_EQ(vitamin_e::frameGapRatio(-0.1, 0.05), 1.0);
 }
 
 TEST(StageTimings, SummariesPerStageInFirstSeenOrder) {

@@ -68,6 +68,62 @@ TEST(DenseMapper, SkipsFramesWithoutEnoughPointsOrPose) {
   EXPECT_THROW(mapper.addFrame(ids, p_c, Eigen::Isometry3d::Identity()), std::invalid_argument);
 }
 
+// The meshing thread does addFrame's work in order: the same frames give the
+// same fused mesh, none is lost, and bad input is refused at the call.
+TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
+  fusion::DenseMapperConfig cfg;
+  cfg.integrator.tsdf.voxel_size = 0.05;
+  cfg.integrator.tsdf.truncation = 0.15;
+  cfg.integrator.block_when_full = true;
+  fusion::DenseMapper inline_mapper(cfg, image());
+  fusion::DenseMapper threaded(cfg, image());
+  std::mt19937 rng(7);
+  std::vector<std::uint64_t> ids;
+  std::vector<Eigen::Vector3d> p_c;
+  const int frames = 8;
+  for (int k = 0; k < frames; ++k) {
+    Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
+    T_w_c.translation() = Eigen::Vector3d(0.08 * k, -0.03 * k, 0.0);
+    planePoints(T_w_c, &rng, &ids, &p_c);
+    inline_mapper.addFrame(ids, p_c, T_w_c);
+    threaded.submitFrame(ids, p_c, T_w_c, 2);
+  }
+  const fusion::TriangleMesh a = inline_mapper.extractMesh();
+  const fusion::TriangleMesh b = threaded.extractMesh();  // waits for the meshing thread
+  ASSERT_GT(a.faces.size(), 100u);
+  ASSERT_EQ(a.vertices.size(), b.vertices.size());
+  ASSERT_EQ(a.faces.size(), b.faces.size());
+  for (std::size_t i = 0; i < a.vertices.size(); ++i) EXPECT_EQ(a.vertices[i], b.vertices[i]) << i;
+  const fusion::DenseWorkStats w = threaded.workStats();
+  EXPECT_EQ(w.submitted, static_cast<std::size_t>(frames));
+  EXPECT_EQ(w.meshed, static_cast<std::size_t>(frames));
+  EXPECT_EQ(w.frame_mesh_ms.size(), static_cast<std::size_t>(frames));
+  EXPECT_EQ(threaded.integratorStats().integrated, static_cast<std::size_t>(frames));
+  EXPECT_EQ(threaded.integratorStats().dropped, 0u);
+  ids.pop_back();
+  EXPECT_THROW(threaded.submitFrame(ids, p_c, Eigen::Isometry3d::Identity()), std::invalid_argument);
+}
+
+TEST(DenseMapper, ResetDropsWaitingFramesAndKeepsWorking) {
+  fusion::DenseMapperConfig cfg;
+  cfg.integrator.tsdf.voxel_size = 0.05;
+  cfg.integrator.tsdf.truncation = 0.15;
+  std::mt19937 rng(3);
+  std::vector<std::uint64_t> ids;
+  std::vector<Eigen::Vector3d> p_c;
+  fusion::DenseMapper mapper(cfg, image());
+  for (int k = 0; k < 3; ++k) {
+    planePoints(Eigen::Isometry3d::Identity(), &rng, &ids, &p_c);
+    mapper.submitFrame(ids, p_c, Eigen::Isometry3d::Identity(), 8);
+  }
+  mapper.reset();  // drops what waits, keeps working afterwards
+  planePoints(Eigen::Isometry3d::Identity(), &rng, &ids, &p_c);
+  mapper.submitFrame(ids, p_c, Eigen::Isometry3d::Identity());
+  mapper.flush();
+  EXPECT_GE(mapper.workStats().meshed, 1u);
+  for (int k = 0; k < 3; ++k) mapper.submitFrame(ids, p_c, Eigen::Isometry3d::Identity(), 8);
+}  // destroyed with frames waiting: they are finished, then the thread joins
+
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();

@@ -208,6 +208,33 @@ TEST_F(RunnerTest, RunsASequenceAndSkipsAnUnreadableFrame) {
   }
   ASSERT_EQ(stamps.size(), 3u) << r3.out;
   for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(stamps[k], 1403715273.562143 + 0.1 * k, 1e-5) << r3.out;
+
+  // --pipelined reads the images ahead on another thread: the same frames, in order, the
+  // unreadable one skipped with its warning, and CPU times per stage in stats.json.
+  const Result r4 = run("--dataset " + top.string() + " --out " + out.string() +
+                        " --quiet --pipelined --log-frames --start-frame 1 --stride 2");
+  ASSERT_EQ(r4.code, 0) << r4.err;
+  EXPECT_NE(r4.err.find("1403715273512142976.png"), std::string::npos) << r4.err;
+  const YAML::Node j4 = YAML::LoadFile((out / "stats.json").string());
+  EXPECT_EQ(j4["frames"].as<int>(), 5);  // frames 1, 3, 5, 7, 9, 11 less the unreadable 5
+  EXPECT_EQ(j4["skipped_frames"].as<int>(), 1);
+  EXPECT_EQ(j4["timing_ms"]["image_load"]["count"].as<int>(), 5);
+  for (const char* stage : {"image_load", "tracking", "mapping"}) {
+    EXPECT_GE(j4["cpu_ms"][stage].as<double>(), 0.0) << stage;
+  }
+  std::istringstream log4(r4.out);
+  std::vector<double> stamps4;
+  for (std::string line; std::getline(log4, line);) {
+    std::istringstream ls(line);
+    std::string index;
+    double stamp = 0.0;
+    if (ls >> index >> stamp) stamps4.push_back(stamp);
+  }
+  ASSERT_EQ(stamps4.size(), 5u) << r4.out;
+  const std::vector<int> frames4 = {1, 3, 7, 9, 11};
+  for (std::size_t k = 0; k < 5; ++k) {
+    EXPECT_NEAR(stamps4[k], 1403715273.262143 + 0.05 * frames4[k], 1e-5) << r4.out;
+  }
 }
 
 namespace {

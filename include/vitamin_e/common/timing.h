@@ -30,6 +30,13 @@ struct TimingSummary {
   std::size_t count = 0;
 };
 
+// A frame's gap to the previous one over the interval before that: 2 after one
+// dropped frame, 3 after two. A ratio within kSteadyRateTolerance either way is
+// a steady rate (stamps jitter) and gives 1, as does an unknown (non-finite or
+// non-positive) gap or interval. Motion predicted per frame is scaled by it.
+constexpr double kSteadyRateTolerance = 1.25;
+double frameGapRatio(double gap_s, double interval_s);
+
 // Percentile (0..100) of a sample by linear interpolation; 0 for an empty sample.
 double percentile(std::vector<double> values, double pct);
 // The upper median (element n/2 of the sorted sample, no interpolation); 0 if empty.

@@ -5,11 +5,17 @@
 // depths (meshing::NltgvDenoiser, warm-started by track id) -> pruning of bad
 // triangles -> TSDF fusion (fusion::TsdfIntegrator, on its own thread unless
 // configured synchronous) -> marching cubes on demand. Used by the offline
-// runner and the ROS meshing nodelet.
+// runner and the ROS meshing nodelet. addFrame() meshes on the caller's thread;
+// submitFrame() hands the whole frame to the mapper's meshing thread (off the
+// SLAM's critical path), in order, never dropping one.
 #include <Eigen/Geometry>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "vitamin_e/fusion/triangle_mesh.h"
@@ -42,6 +48,15 @@ struct DenseFrameStats {
   double denoise_ms = 0.0;  // NLTGV
 };
 
+// What the meshing thread did with the submitFrame() frames so far.
+struct DenseWorkStats {
+  std::size_t submitted = 0;
+  std::size_t meshed = 0;             // frames that gave a mesh to fuse
+  double mesh_ms = 0.0;               // sum of mesh_ms + denoise_ms of those frames (wall)
+  double mesh_cpu_ms = 0.0;           // the meshing thread's CPU time for all frames
+  std::vector<double> frame_mesh_ms;  // mesh_ms + denoise_ms of each meshed frame
+};
+
 class DenseMapper {
  public:
   DenseMapper(const DenseMapperConfig& config, const meshing::PinholeImage& image);
@@ -49,7 +64,18 @@ class DenseMapper {
   // ids[i] is the track id of p_c[i] (camera frame, map units).
   DenseFrameStats addFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
                            const Eigen::Isometry3d& T_w_c);
-  void flush();  // waits for the queued frames to be fused
+  // The same work as addFrame on the mapper's meshing thread (started at the
+  // first call): returns at once unless `max_waiting` frames already wait, then
+  // blocks until one is taken. Frames are meshed in submission order, none
+  // dropped (the TSDF integrator's own queue rules still apply). Throws like
+  // addFrame for mismatched sizes. Do not mix with addFrame between flush()es.
+  void submitFrame(std::vector<std::uint64_t> ids, std::vector<Eigen::Vector3d> p_c, const Eigen::Isometry3d& T_w_c,
+                   std::size_t max_waiting = 4);
+  DenseWorkStats workStats() const;
+  ~DenseMapper();  // finishes the submitted frames, then joins the meshing thread
+  DenseMapper(const DenseMapper&) = delete;
+  DenseMapper& operator=(const DenseMapper&) = delete;
+  void flush();  // waits for the submitted frames to be meshed and the queued ones to be fused
   TriangleMesh extractMesh();
   bool saveMesh(const std::string& path, std::string* error = nullptr);
   // The TSDF's voxel blocks to / from a file (TsdfVolume::save / load): a run
@@ -61,12 +87,28 @@ class DenseMapper {
   const DenseMapperConfig& config() const { return config_; }
 
  private:
+  struct Submitted {
+    std::vector<std::uint64_t> ids;
+    std::vector<Eigen::Vector3d> p_c;
+    Eigen::Isometry3d T_w_c;
+  };
+  void meshLoop();
+  void waitMeshed();
+
   DenseMapperConfig config_;
   meshing::PinholeImage image_;
   meshing::FrameMesher mesher_;
   meshing::FrameMesher pruner_;
   meshing::NltgvDenoiser denoiser_;
   std::unique_ptr<TsdfIntegrator> integrator_;
+  // the meshing thread of submitFrame()
+  mutable std::mutex work_mutex_;
+  std::condition_variable work_cv_, done_cv_;
+  std::deque<Submitted> work_;
+  bool working_ = false;
+  bool stop_ = false;
+  DenseWorkStats work_stats_;
+  std::thread mesher_thread_;
 };
 
 }  // namespace vitamin_e::fusion

@@ -33,6 +33,11 @@ struct RunStats {
   std::vector<double> points_per_frame;         // tracked points of each frame
   std::vector<double> mapped_points_per_frame;  // of which with a 3D position
   StageTimings timing;                          // per-stage ms, with a "total" stage
+  // CPU ms per processed frame of each stage on its own thread ("image_load", "tracking",
+  // "mapping", "mesh", "tsdf"); helper threads (the tracker's stripes) are not in it.
+  std::map<std::string, double> cpu_ms;
+  std::size_t dense_fused = 0;    // frame meshes fused into the TSDF
+  std::size_t dense_dropped = 0;  // frame meshes the TSDF's queue dropped (it lagged behind)
   // Per-frame counters by name (one value per frame that has it: pipeline::FrameDiagnostics),
   // summarized in stats.json as frame_diagnostics {name: {mean, median, min, max, sum}}.
   std::map<std::string, std::vector<double>> frame_counters;

@@ -45,6 +45,13 @@ class PipelinedSystem {
   // Blocks until every submitted frame has been mapped (or dropped).
   void flush();
   std::size_t droppedFrames() const;
+  // CPU time [ms] the two threads spent in trackFrame and in mapFrame so far
+  // (on_result not included; the tracker's helper threads not either).
+  struct StageCpu {
+    double tracking_ms = 0.0;
+    double mapping_ms = 0.0;
+  };
+  StageCpu stageCpuMs() const;
 
   // The underlying system, for trajectory(), mapPoints(), counters: call only
   // after flush() (the mapping thread is idle then).
@@ -70,6 +77,7 @@ class PipelinedSystem {
   mutable std::mutex count_mutex_;
   std::condition_variable idle_cv_;
   std::size_t submitted_ = 0, finished_ = 0, dropped_ = 0;
+  StageCpu cpu_;
 };
 
 }  // namespace vitamin_e::pipeline
