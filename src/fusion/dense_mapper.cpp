@@ -1,5 +1,6 @@
 #include "vitamin_e/fusion/dense_mapper.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "vitamin_e/common/timing.h"
@@ -26,6 +27,28 @@ DenseMapper::DenseMapper(const DenseMapperConfig& config, const meshing::Pinhole
   config_.validate();
   image_.validate();
   integrator_ = std::make_unique<TsdfIntegrator>(config_.integrator);
+}
+
+DenseFrameStats DenseMapper::addFrame(const DenseFrame& frame) {
+  if (!frame.map_scaling.isValid()) {
+    throw std::invalid_argument("DenseMapper::addFrame: the map scaling is not finite and positive");
+  }
+  if (frame.map_scaling != input_scaling_) {
+    // What the map went through since the last frame, applied on top of the volume's scaling.
+    const MapScaling step = frame.map_scaling.after(input_scaling_.inverse());
+    scaling_ = step.after(scaling_);
+    integrator_->submitScaling(scaling_);
+    input_scaling_ = frame.map_scaling;
+  }
+  return addFrame(frame.ids, frame.p_c, frame.T_w_c);
+}
+
+void DenseMapper::rescale(const Eigen::Vector3d& centre, double factor) {
+  if (!(factor > 0.0) || !std::isfinite(factor) || !centre.allFinite()) {
+    throw std::invalid_argument("DenseMapper::rescale: the factor must be finite and positive, the centre finite");
+  }
+  scaling_ = MapScaling::about(centre, factor).after(scaling_);
+  integrator_->submitScaling(scaling_);
 }
 
 DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
@@ -66,13 +89,17 @@ bool DenseMapper::saveMesh(const std::string& path, std::string* error) {
 
 bool DenseMapper::saveTsdf(const std::string& path, std::string* error) { return integrator_->saveVolume(path, error); }
 
-void DenseMapper::loadTsdf(const std::string& path) { integrator_->loadVolume(path); }
+void DenseMapper::loadTsdf(const std::string& path) { scaling_ = integrator_->loadVolume(path); }
+
+MeshBlockUpdate DenseMapper::takeChangedBlocks() { return integrator_->takeChangedBlocks(); }
 
 TsdfIntegratorStats DenseMapper::integratorStats() const { return integrator_->stats(); }
 
 void DenseMapper::reset() {
   integrator_->reset();
   denoiser_.reset();
+  scaling_ = MapScaling{};
+  input_scaling_ = MapScaling{};
 }
 
 }  // namespace vitamin_e::fusion
