@@ -28,6 +28,7 @@
 #include "vitamin_e/io/dataset.h"
 #include "vitamin_e/io/run_report.h"
 #include "vitamin_e/map/map_file.h"
+#include "vitamin_e/pipeline/dense_input.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/system.h"
 #ifdef VITAMIN_E_WITH_ROS
@@ -390,8 +391,7 @@ int run(const Options& o) {
                    vitamin_e::elapsedMs(t0));
     }
   }
-  std::vector<std::uint64_t> dense_ids;
-  std::vector<Eigen::Vector3d> dense_points;
+  pl::DenseInput dense_input;
 
   io::RunStats stats;
   stats.dataset = o.dataset;
@@ -420,8 +420,7 @@ int run(const Options& o) {
     addCounters(r, &stats);
     if (dense) {
       // Per-frame mesh + NLTGV here; TSDF fusion runs on the mapper's own thread.
-      pl::framePointsInCamera(r, &dense_ids, &dense_points);
-      const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
+      const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_input.next(r));
       if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
     }
     stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
