@@ -63,7 +63,7 @@ bool writeBinaryFile(const std::string& path, const std::string& header_line, co
   const std::uint64_t sum = fnv1a64(payload.data(), payload.size());
   head.append(reinterpret_cast<const char*>(&size), sizeof(size));
   head.append(reinterpret_cast<const char*>(&sum), sizeof(sum));
-  auto writeAll = [&](const std::string& s) {
+  auto write_all = [&](const std::string& s) {
     std::size_t done = 0;
     while (done < s.size()) {
       const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
@@ -75,7 +75,7 @@ bool writeBinaryFile(const std::string& path, const std::string& header_line, co
     }
     return true;
   };
-  const bool written = writeAll(head) && writeAll(payload) && ::fsync(fd) == 0;
+  const bool written = write_all(head) && write_all(payload) && ::fsync(fd) == 0;
   const int saved_errno = errno;
   if (::close(fd) != 0 || !written) {
     ::unlink(tmp.c_str());

@@ -55,7 +55,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
         std::uint64_t key[12 + mc::kMaxCentroids];
         Eigen::Vector3f pos[12 + mc::kMaxCentroids];
         int done = 0;  // bit i: vertex i computed
-        auto edgeVertex = [&](int e) {
+        auto edge_vertex = [&](int e) {
           if (done & (1 << e)) return;
           // Identity: the edge's lower voxel and its axis (shared across cubes and blocks).
           const int axis = mc::edgeAxis(e), lo = mc::edgeLowerCorner(e), hi = lo | (1 << axis);
@@ -72,7 +72,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
           for (int k = 0; k < 3; ++k) {
             const int e = t[k];
             if (e < 12) {
-              edgeVertex(e);
+              edge_vertex(e);
             } else if (!(done & (1 << e))) {
               // Centroid of a loop: this cube's own vertex (low bits 0, 3, 5: no edge uses them).
               constexpr std::uint64_t kTag[mc::kMaxCentroids] = {0, 3, 5};
@@ -80,7 +80,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
               Eigen::Vector3f sum = Eigen::Vector3f::Zero();
               int cnt = 0;
               for (int q = 0; q < 12; ++q)
-                if (edges & (1u << q)) edgeVertex(q), sum += pos[q], ++cnt;
+                if (edges & (1u << q)) edge_vertex(q), sum += pos[q], ++cnt;
               pos[e] = sum / static_cast<float>(cnt);
               key[e] = cube_key ^ kTag[e - 12];
               done |= 1 << e;
