@@ -12,19 +12,20 @@ roslaunch_add_file_check(launch IGNORE_UNSET_ARGS)
 set(VE_TEST_DATA ${CMAKE_CURRENT_BINARY_DIR}/rostest_data)
 set(VE_TEST_OUT ${CMAKE_CURRENT_BINARY_DIR}/rostest_out)
 set(VE_TEST_FRAMES 60)
+set(VE_TEST_LONG_FRAMES 200)  # long.bag: the mesh stream's test
 set(VE_SOURCE_DIR ${CMAKE_CURRENT_SOURCE_DIR})
 file(MAKE_DIRECTORY ${VE_TEST_OUT})
 
 # The input sequence: the project's generator when it is built, else a room
 # ray-cast by the script itself.
-set(_ve_bag_args ${VE_TEST_DATA} --frames ${VE_TEST_FRAMES})
+set(_ve_bag_args ${VE_TEST_DATA} --frames ${VE_TEST_FRAMES} --long-frames ${VE_TEST_LONG_FRAMES})
 set(_ve_bag_deps ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/make_test_bag.py ${CMAKE_CURRENT_SOURCE_DIR}/scripts/make_bag.sh)
 if(TARGET vitamin_e_make_sequence)
   list(APPEND _ve_bag_args --generator $<TARGET_FILE:vitamin_e_make_sequence>
     --make-bag ${CMAKE_CURRENT_SOURCE_DIR}/scripts/make_bag.sh)
   list(APPEND _ve_bag_deps vitamin_e_make_sequence)
 endif()
-add_custom_command(OUTPUT ${VE_TEST_DATA}/sequence.bag ${VE_TEST_DATA}/sensors.bag
+add_custom_command(OUTPUT ${VE_TEST_DATA}/sequence.bag ${VE_TEST_DATA}/sensors.bag ${VE_TEST_DATA}/long.bag
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/make_test_bag.py ${_ve_bag_args}
   DEPENDS ${_ve_bag_deps}
   COMMENT "rostest input sequence -> ${VE_TEST_DATA}")

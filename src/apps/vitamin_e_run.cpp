@@ -30,6 +30,7 @@
 #include "vitamin_e/io/frame_prefetcher.h"
 #include "vitamin_e/io/run_report.h"
 #include "vitamin_e/map/map_file.h"
+#include "vitamin_e/pipeline/dense_input.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/system.h"
 #ifdef VITAMIN_E_WITH_ROS
@@ -396,8 +397,7 @@ int run(const Options& o) {
                    vitamin_e::elapsedMs(t0));
     }
   }
-  std::vector<std::uint64_t> dense_ids;
-  std::vector<Eigen::Vector3d> dense_points;
+  pl::DenseInput dense_input;
 
   io::RunStats stats;
   stats.dataset = o.dataset;
@@ -427,11 +427,11 @@ int run(const Options& o) {
     if (dense) {
       // Sequential: per-frame mesh + NLTGV here. Pipelined: on the dense mapper's
       // meshing thread, off the SLAM's. TSDF fusion runs on the integrator's thread.
-      pl::framePointsInCamera(r, &dense_ids, &dense_points);
+      // Every result goes in, points or not: it carries the map's rescales.
       if (o.pipelined) {
-        if (!dense_ids.empty()) dense->submitFrame(dense_ids, dense_points, r.T_w_c);
+        dense->submitFrame(dense_input.next(r));
       } else {
-        const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_ids, dense_points, r.T_w_c);
+        const vitamin_e::fusion::DenseFrameStats ds = dense->addFrame(dense_input.next(r));
         if (ds.integrated) stages.emplace_back("mesh", ds.mesh_ms + ds.denoise_ms);
       }
     }

@@ -63,7 +63,7 @@ bool writeBinaryFile(const std::string& path, const std::string& header_line, co
   const std::uint64_t sum = fnv1a64(payload.data(), payload.size());
   head.append(reinterpret_cast<const char*>(&size), sizeof(size));
   head.append(reinterpret_cast<const char*>(&sum), sizeof(sum));
-  auto writeAll = [&](const std::string& s) {
+  auto write_all = [&](const std::string& s) {
     std::size_t done = 0;
     while (done < s.size()) {
       const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
@@ -75,7 +75,7 @@ bool writeBinaryFile(const std::string& path, const std::string& header_line, co
     }
     return true;
   };
-  const bool written = writeAll(head) && writeAll(payload) && ::fsync(fd) == 0;
+  const bool written = write_all(head) && write_all(payload) && ::fsync(fd) == 0;
   const int saved_errno = errno;
   if (::close(fd) != 0 || !written) {
     ::unlink(tmp.c_str());
@@ -91,6 +91,11 @@ bool writeBinaryFile(const std::string& path, const std::string& header_line, co
 
 BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind,
                                   int version) {
+  return readBinaryFile(path, magic, kind, version, version);
+}
+
+BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind,
+                                  int oldest_version, int newest_version) {
   const std::string what = kind + " file '" + path + "'";
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) throw BinaryFileError(what + ": " + std::strerror(errno));
@@ -114,10 +119,14 @@ BinaryFileContents readBinaryFile(const std::string& path, const std::string& ma
   if (std::sscanf(out.header_line.c_str() + magic.size(), "%d,", &found) != 1) {
     throw BinaryFileError(what + ": damaged header line '" + out.header_line + "'");
   }
-  if (found != version) {
-    throw BinaryFileError(what + ": format v" + std::to_string(found) + " is not supported (this build reads v" +
-                          std::to_string(version) + ")");
+  if (found < oldest_version || found > newest_version) {
+    const std::string reads = oldest_version == newest_version
+                                  ? "v" + std::to_string(newest_version)
+                                  : "v" + std::to_string(oldest_version) + " to v" + std::to_string(newest_version);
+    throw BinaryFileError(what + ": format v" + std::to_string(found) + " is not supported (this build reads " + reads +
+                          ")");
   }
+  out.version = found;
   const std::size_t head = eol + 1 + 2 * sizeof(std::uint64_t);
   if (data.size() < head) throw BinaryFileError(what + ": truncated after the header line");
   std::uint64_t size = 0, sum = 0;

@@ -1,6 +1,7 @@
 #include "vitamin_e/fusion/dense_mapper.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "vitamin_e/common/timing.h"
@@ -27,6 +28,29 @@ DenseMapper::DenseMapper(const DenseMapperConfig& config, const meshing::Pinhole
   config_.validate();
   image_.validate();
   integrator_ = std::make_unique<TsdfIntegrator>(config_.integrator);
+}
+
+DenseFrameStats DenseMapper::addFrame(const DenseFrame& frame) {
+  if (!frame.map_scaling.isValid()) {
+    throw std::invalid_argument("DenseMapper::addFrame: the map scaling is not finite and positive");
+  }
+  if (frame.map_scaling != input_scaling_) {
+    // What the map went through since the last frame, applied on top of the volume's scaling.
+    const MapScaling step = frame.map_scaling.after(input_scaling_.inverse());
+    scaling_ = step.after(scaling_);
+    integrator_->submitScaling(scaling_);
+    input_scaling_ = frame.map_scaling;
+  }
+  return addFrame(frame.ids, frame.p_c, frame.T_w_c);
+}
+
+void DenseMapper::rescale(const Eigen::Vector3d& centre, double factor) {
+  if (!(factor > 0.0) || !std::isfinite(factor) || !centre.allFinite()) {
+    throw std::invalid_argument("DenseMapper::rescale: the factor must be finite and positive, the centre finite");
+  }
+  waitMeshed();  // the frames submitted before are fused in the old scale
+  scaling_ = MapScaling::about(centre, factor).after(scaling_);
+  integrator_->submitScaling(scaling_);
 }
 
 DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
@@ -62,20 +86,24 @@ DenseMapper::~DenseMapper() {
   if (mesher_thread_.joinable()) mesher_thread_.join();
 }
 
-void DenseMapper::submitFrame(std::vector<std::uint64_t> ids, std::vector<Eigen::Vector3d> p_c,
-                              const Eigen::Isometry3d& T_w_c, std::size_t max_waiting) {
-  if (ids.size() != p_c.size()) throw std::invalid_argument("DenseMapper::submitFrame: ids and points differ in size");
+void DenseMapper::submitFrame(DenseFrame frame, std::size_t max_waiting) {
+  if (frame.ids.size() != frame.p_c.size()) {
+    throw std::invalid_argument("DenseMapper::submitFrame: ids and points differ in size");
+  }
+  if (!frame.map_scaling.isValid()) {
+    throw std::invalid_argument("DenseMapper::submitFrame: the map scaling is not finite and positive");
+  }
   std::unique_lock<std::mutex> lock(work_mutex_);
   if (!mesher_thread_.joinable()) mesher_thread_ = std::thread([this] { meshLoop(); });
   done_cv_.wait(lock, [&] { return work_.size() < std::max<std::size_t>(1, max_waiting); });
-  work_.push_back(Submitted{std::move(ids), std::move(p_c), T_w_c});
+  work_.push_back(std::move(frame));
   ++work_stats_.submitted;
   work_cv_.notify_one();
 }
 
 void DenseMapper::meshLoop() {
   for (;;) {
-    Submitted job;
+    DenseFrame job;
     {
       std::unique_lock<std::mutex> lock(work_mutex_);
       work_cv_.wait(lock, [this] { return stop_ || !work_.empty(); });
@@ -86,7 +114,7 @@ void DenseMapper::meshLoop() {
     }
     done_cv_.notify_all();
     const double cpu0 = threadCpuMs();
-    const DenseFrameStats s = addFrame(job.ids, job.p_c, job.T_w_c);
+    const DenseFrameStats s = addFrame(job);
     const double cpu = threadCpuMs() - cpu0;
     {
       std::lock_guard<std::mutex> lock(work_mutex_);
@@ -134,8 +162,10 @@ bool DenseMapper::saveTsdf(const std::string& path, std::string* error) {
 
 void DenseMapper::loadTsdf(const std::string& path) {
   waitMeshed();
-  integrator_->loadVolume(path);
+  scaling_ = integrator_->loadVolume(path);
 }
+
+MeshBlockUpdate DenseMapper::takeChangedBlocks() { return integrator_->takeChangedBlocks(); }
 
 TsdfIntegratorStats DenseMapper::integratorStats() const { return integrator_->stats(); }
 
@@ -148,6 +178,8 @@ void DenseMapper::reset() {
   waitMeshed();
   integrator_->reset();
   denoiser_.reset();
+  scaling_ = MapScaling{};
+  input_scaling_ = MapScaling{};
 }
 
 }  // namespace vitamin_e::fusion

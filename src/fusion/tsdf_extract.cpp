@@ -8,6 +8,18 @@
 
 namespace vitamin_e::fusion {
 
+namespace {
+bool sameTriangles(const std::vector<CachedTriangle>& a, const std::vector<CachedTriangle>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].key != b[i].key) return false;
+    for (int k = 0; k < 3; ++k)
+      if (a[i].p[k] != b[i].p[k]) return false;
+  }
+  return true;
+}
+}  // namespace
+
 void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const {
   block->triangles.clear();
   const int n = config.block_voxels;
@@ -43,7 +55,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
         std::uint64_t key[12 + mc::kMaxCentroids];
         Eigen::Vector3f pos[12 + mc::kMaxCentroids];
         int done = 0;  // bit i: vertex i computed
-        auto edgeVertex = [&](int e) {
+        auto edge_vertex = [&](int e) {
           if (done & (1 << e)) return;
           // Identity: the edge's lower voxel and its axis (shared across cubes and blocks).
           const int axis = mc::edgeAxis(e), lo = mc::edgeLowerCorner(e), hi = lo | (1 << axis);
@@ -60,7 +72,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
           for (int k = 0; k < 3; ++k) {
             const int e = t[k];
             if (e < 12) {
-              edgeVertex(e);
+              edge_vertex(e);
             } else if (!(done & (1 << e))) {
               // Centroid of a loop: this cube's own vertex (low bits 0, 3, 5: no edge uses them).
               constexpr std::uint64_t kTag[mc::kMaxCentroids] = {0, 3, 5};
@@ -68,7 +80,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
               Eigen::Vector3f sum = Eigen::Vector3f::Zero();
               int cnt = 0;
               for (int q = 0; q < 12; ++q)
-                if (edges & (1u << q)) edgeVertex(q), sum += pos[q], ++cnt;
+                if (edges & (1u << q)) edge_vertex(q), sum += pos[q], ++cnt;
               pos[e] = sum / static_cast<float>(cnt);
               key[e] = cube_key ^ kTag[e - 12];
               done |= 1 << e;
@@ -94,10 +106,15 @@ std::size_t TsdfVolume::updateMesh() {
   std::sort(todo.begin(), todo.end());
   todo.erase(std::unique(todo.begin(), todo.end()), todo.end());
   impl_->last_remeshed = 0;
+  std::vector<CachedTriangle> before;
   for (std::uint64_t key : todo) {
     const auto it = impl_->blocks.find(key);
     if (it == impl_->blocks.end()) continue;
-    impl_->remeshBlock(unpackIndex(key), it->second.get());
+    Block* block = it->second.get();
+    before.swap(block->triangles);
+    impl_->remeshBlock(unpackIndex(key), block);
+    // A neighbour re-meshed for a change next door often keeps its surface: not a change.
+    if (!sameTriangles(before, block->triangles)) impl_->changed.insert(key);
     ++impl_->last_remeshed;
   }
   for (auto& [key, block] : impl_->blocks) block->dirty = false;
@@ -120,7 +137,7 @@ TriangleMesh TsdfVolume::extractMesh() {
       Eigen::Vector3i f;
       for (int k = 0; k < 3; ++k) {
         const auto [it, inserted] = index.emplace(t.key[k], static_cast<int>(mesh.vertices.size()));
-        if (inserted) mesh.vertices.push_back(t.p[k]);
+        if (inserted) mesh.vertices.push_back(impl_->toMap(t.p[k]));
         f[k] = it->second;
       }
       mesh.faces.push_back(f);
@@ -137,6 +154,38 @@ TriangleMesh TsdfVolume::extractMesh() {
     nrm = l > 0.0f ? Eigen::Vector3f(nrm / l) : Eigen::Vector3f(0.0f, 0.0f, 1.0f);
   }
   return mesh;
+}
+
+MeshBlockUpdate TsdfVolume::takeChangedBlocks() {
+  updateMesh();
+  MeshBlockUpdate update;
+  update.replace_all = impl_->replace_all;
+  std::vector<std::uint64_t> keys;
+  if (impl_->replace_all) {
+    for (const auto& [key, block] : impl_->blocks) {
+      block->reported = false;
+      if (!block->triangles.empty()) keys.push_back(key);
+    }
+  } else {
+    keys.assign(impl_->changed.begin(), impl_->changed.end());
+  }
+  std::sort(keys.begin(), keys.end());
+  for (std::uint64_t key : keys) {
+    const auto it = impl_->blocks.find(key);
+    if (it == impl_->blocks.end()) continue;  // only clear() and load() remove blocks: replace_all
+    Block& block = *it->second;
+    if (block.triangles.empty() && !block.reported) continue;
+    MeshBlock out;
+    out.index = unpackIndex(key);
+    out.vertices.reserve(3 * block.triangles.size());
+    for (const CachedTriangle& t : block.triangles)
+      for (int k = 0; k < 3; ++k) out.vertices.push_back(impl_->toMap(t.p[k]));
+    block.reported = !block.triangles.empty();
+    update.blocks.push_back(std::move(out));
+  }
+  impl_->changed.clear();
+  impl_->replace_all = false;
+  return update;
 }
 
 }  // namespace vitamin_e::fusion

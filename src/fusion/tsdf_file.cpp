@@ -9,14 +9,16 @@
 namespace vitamin_e::fusion {
 
 namespace {
+// v1: the blocks; v2: the blocks and the volume's scaling (written only when it is not the identity).
 constexpr int kVersion = 1;
+constexpr int kScaledVersion = 2;
 constexpr std::uint32_t kByteOrderMark = 0x01020304u;
 constexpr std::uint32_t kEndMark = 0x46445354u;
 const char* const kMagic = "vitamin_e tsdf v";
 
-std::string headerLine(std::size_t blocks, const TsdfConfig& c) {
+std::string headerLine(int version, std::size_t blocks, const TsdfConfig& c) {
   char line[160];
-  std::snprintf(line, sizeof(line), "vitamin_e tsdf v%d, %zu blocks, voxel %.9g, %d^3 voxels per block", kVersion,
+  std::snprintf(line, sizeof(line), "vitamin_e tsdf v%d, %zu blocks, voxel %.9g, %d^3 voxels per block", version,
                 blocks, c.voxel_size, c.block_voxels);
   return line;
 }
@@ -31,11 +33,17 @@ bool TsdfVolume::save(const std::string& path, std::string* error) const {
   std::sort(keys.begin(), keys.end());
   BinaryWriter w;
   const std::size_t n3 = static_cast<std::size_t>(c.block_voxels) * c.block_voxels * c.block_voxels;
-  w.bytes().reserve(64 + keys.size() * (12 + 8 * n3));
+  w.bytes().reserve(96 + keys.size() * (12 + 8 * n3));
+  const MapScaling& scaling = impl_->scaling;
+  const int version = scaling.isIdentity() ? kVersion : kScaledVersion;
   w.put(kByteOrderMark);
   w.put(c.voxel_size);
   w.put(c.truncation);
   w.put(static_cast<std::int32_t>(c.block_voxels));
+  if (version == kScaledVersion) {
+    w.put(scaling.scale);
+    w.putDoubles(scaling.offset.data(), 3);
+  }
   w.put(static_cast<std::uint64_t>(keys.size()));
   for (std::uint64_t key : keys) {
     const Eigen::Vector3i b = unpackIndex(key);
@@ -46,15 +54,16 @@ bool TsdfVolume::save(const std::string& path, std::string* error) const {
     }
   }
   w.put(kEndMark);
-  return writeBinaryFile(path, headerLine(keys.size(), c), w.bytes(), error);
+  return writeBinaryFile(path, headerLine(version, keys.size(), c), w.bytes(), error);
 }
 
 void TsdfVolume::load(const std::string& path) {
   const std::string what = "TSDF file '" + path + "'";
   const TsdfConfig& c = impl_->config;
   std::unordered_map<std::uint64_t, std::unique_ptr<Block>> blocks;
+  MapScaling scaling;
   try {
-    const BinaryFileContents file = readBinaryFile(path, kMagic, "TSDF", kVersion);
+    const BinaryFileContents file = readBinaryFile(path, kMagic, "TSDF", kVersion, kScaledVersion);
     BinaryReader r(file.payload.data(), file.payload.size(), what);
     if (r.get<std::uint32_t>() != kByteOrderMark) r.fail("written with another byte order or damaged");
     const double voxel = r.getFinite("voxel size");
@@ -67,6 +76,11 @@ void TsdfVolume::load(const std::string& path) {
                     "made with voxel %.9g, %d^3 voxels per block, truncation %.9g; this volume has %.9g, %d^3, %.9g",
                     voxel, block_voxels, truncation, c.voxel_size, c.block_voxels, c.truncation);
       r.fail(buf);
+    }
+    if (file.version == kScaledVersion) {
+      scaling.scale = r.getFinite("scale");
+      for (int k = 0; k < 3; ++k) scaling.offset[k] = r.getFinite("offset");
+      if (!scaling.isValid()) r.fail("a scale that is not positive");
     }
     const std::size_t n3 = static_cast<std::size_t>(c.block_voxels) * c.block_voxels * c.block_voxels;
     const std::uint64_t count = r.getCount(12 + 8 * n3, "blocks");
@@ -92,7 +106,7 @@ void TsdfVolume::load(const std::string& path) {
     }
     if (r.get<std::uint32_t>() != kEndMark) r.fail("damaged (no end mark after the data)");
     if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " bytes after the end mark");
-    if (file.header_line != headerLine(blocks.size(), c)) {
+    if (file.header_line != headerLine(file.version, blocks.size(), c)) {
       throw TsdfFileError(what + ": the header line '" + file.header_line + "' does not describe its data");
     }
   } catch (const BinaryFileError& e) {
@@ -100,6 +114,9 @@ void TsdfVolume::load(const std::string& path) {
   }
   impl_->blocks.swap(blocks);  // every block new: all re-meshed at the next extraction
   impl_->last_remeshed = 0;
+  impl_->scaling = scaling;
+  impl_->changed.clear();
+  impl_->replace_all = true;
 }
 
 }  // namespace vitamin_e::fusion

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "vitamin_e/fusion/tsdf_volume.h"
@@ -33,15 +34,24 @@ struct CachedTriangle {
 struct Block {
   std::vector<Voxel> voxels;  // x fastest: x + n * (y + n * z)
   bool dirty = true;
-  std::vector<CachedTriangle> triangles;
+  std::vector<CachedTriangle> triangles;  // volume coordinates
+  bool reported = false;                  // takeChangedBlocks() gave it with triangles last time
 };
 
 struct TsdfVolume::Impl {
   TsdfConfig config;
   std::unordered_map<std::uint64_t, std::unique_ptr<Block>> blocks;
   std::size_t last_remeshed = 0;
+  MapScaling scaling;                         // volume -> map coordinates
+  std::unordered_set<std::uint64_t> changed;  // blocks whose triangles changed since takeChangedBlocks()
+  bool replace_all = true;                    // ... or all of them: the next update replaces everything
 
   double blockSize() const { return config.voxel_size * config.block_voxels; }
+  // A vertex in map coordinates (exactly the cached one while the scaling is the identity).
+  Eigen::Vector3f toMap(const Eigen::Vector3f& p_v) const {
+    if (scaling.isIdentity()) return p_v;
+    return scaling.apply(p_v.cast<double>()).cast<float>();
+  }
   Block* find(const Eigen::Vector3i& b) const {
     const auto it = blocks.find(packIndex(b));
     return it == blocks.end() ? nullptr : it->second.get();

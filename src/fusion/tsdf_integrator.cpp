@@ -1,5 +1,6 @@
 #include "vitamin_e/fusion/tsdf_integrator.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "vitamin_e/common/timing.h"
@@ -26,6 +27,11 @@ TsdfIntegrator::~TsdfIntegrator() {
 }
 
 void TsdfIntegrator::integrateJob(const Job& job) {
+  if (job.is_scaling) {
+    std::lock_guard<std::mutex> lock(volume_mutex_);
+    volume_.setScaling(job.scaling);
+    return;
+  }
   const auto t0 = TimingClock::now();
   const double cpu0 = threadCpuMs();
   {
@@ -44,22 +50,38 @@ void TsdfIntegrator::integrateJob(const Job& job) {
 void TsdfIntegrator::submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c,
                             const meshing::PinholeImage& image) {
   Job job{std::move(mesh), T_w_c, image};
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    ++stats_.submitted;
+  }
+  enqueue(std::move(job));
+}
+
+void TsdfIntegrator::submitScaling(const MapScaling& volume_to_map) {
+  if (!volume_to_map.isValid()) throw std::invalid_argument("TsdfIntegrator::submitScaling: a non-positive scale");
+  Job job;
+  job.is_scaling = true;
+  job.scaling = volume_to_map;
+  enqueue(std::move(job));
+}
+
+void TsdfIntegrator::enqueue(Job job) {
   if (!config_.asynchronous) {
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      ++stats_.submitted;
-    }
     integrateJob(job);
     return;
   }
   {
     std::unique_lock<std::mutex> lock(queue_mutex_);
-    ++stats_.submitted;
-    if (queue_.size() >= config_.queue_capacity) {
+    // Frames count against the capacity; a scaling is small and must not be lost.
+    const auto frames = [this] {
+      return static_cast<std::size_t>(
+          std::count_if(queue_.begin(), queue_.end(), [](const Job& j) { return !j.is_scaling; }));
+    };
+    if (!job.is_scaling && frames() >= config_.queue_capacity) {
       if (config_.block_when_full) {
-        idle_cv_.wait(lock, [this] { return queue_.size() < config_.queue_capacity || stop_; });
+        idle_cv_.wait(lock, [&] { return frames() < config_.queue_capacity || stop_; });
       } else {
-        queue_.pop_front();
+        queue_.erase(std::find_if(queue_.begin(), queue_.end(), [](const Job& j) { return !j.is_scaling; }));
         ++stats_.dropped;
       }
     }
@@ -100,6 +122,11 @@ TriangleMesh TsdfIntegrator::extractMesh() {
   return volume_.extractMesh();
 }
 
+MeshBlockUpdate TsdfIntegrator::takeChangedBlocks() {
+  std::lock_guard<std::mutex> lock(volume_mutex_);
+  return volume_.takeChangedBlocks();
+}
+
 bool TsdfIntegrator::saveMesh(const std::string& path, std::string* error) {
   return saveMeshPly(extractMesh(), path, error);
 }
@@ -110,10 +137,11 @@ bool TsdfIntegrator::saveVolume(const std::string& path, std::string* error) {
   return volume_.save(path, error);
 }
 
-void TsdfIntegrator::loadVolume(const std::string& path) {
+MapScaling TsdfIntegrator::loadVolume(const std::string& path) {
   flush();
   std::lock_guard<std::mutex> lock(volume_mutex_);
   volume_.load(path);
+  return volume_.scaling();
 }
 
 TsdfIntegratorStats TsdfIntegrator::stats() const {
@@ -124,7 +152,8 @@ TsdfIntegratorStats TsdfIntegrator::stats() const {
 void TsdfIntegrator::reset() {
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
-    stats_.dropped += queue_.size();
+    stats_.dropped += static_cast<std::size_t>(
+        std::count_if(queue_.begin(), queue_.end(), [](const Job& j) { return !j.is_scaling; }));
     queue_.clear();
   }
   flush();

@@ -88,7 +88,29 @@ TsdfVolume& TsdfVolume::operator=(TsdfVolume&&) noexcept = default;
 const TsdfConfig& TsdfVolume::config() const { return impl_->config; }
 std::size_t TsdfVolume::numBlocks() const { return impl_->blocks.size(); }
 std::size_t TsdfVolume::lastRemeshedBlocks() const { return impl_->last_remeshed; }
-void TsdfVolume::clear() { impl_->blocks.clear(); }
+void TsdfVolume::clear() {
+  impl_->blocks.clear();
+  impl_->changed.clear();
+  impl_->replace_all = true;
+  impl_->scaling = MapScaling{};
+}
+
+const MapScaling& TsdfVolume::scaling() const { return impl_->scaling; }
+
+void TsdfVolume::setScaling(const MapScaling& volume_to_map) {
+  if (!volume_to_map.isValid())
+    throw std::invalid_argument("TsdfVolume::setScaling: a non-finite or non-positive scale");
+  if (volume_to_map == impl_->scaling) return;
+  impl_->scaling = volume_to_map;
+  // Every surface moved: each block that has one (or had one, as reported) changed.
+  for (const auto& [key, block] : impl_->blocks) {
+    if (!block->triangles.empty() || block->reported) impl_->changed.insert(key);
+  }
+}
+
+void TsdfVolume::rescale(const Eigen::Vector3d& centre, double factor) {
+  setScaling(MapScaling::about(centre, factor).after(impl_->scaling));
+}
 
 std::vector<float> TsdfVolume::rasterizeDepth(const meshing::FrameMesh& mesh, const meshing::PinholeImage& image) {
   std::vector<float> d = rasterize(mesh, 1.0, 0.0, image.width, image.height);
@@ -105,12 +127,27 @@ IntegrationStats TsdfVolume::integrate(const meshing::FrameMesh& mesh, const Eig
   return integrateDepth(d, T_w_c, small);
 }
 
-IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth, const Eigen::Isometry3d& T_w_c,
+IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth_map, const Eigen::Isometry3d& T_map_c,
                                             const meshing::PinholeImage& image) {
   image.validate();
-  if (depth.size() != static_cast<std::size_t>(image.width) * image.height)
+  if (depth_map.size() != static_cast<std::size_t>(image.width) * image.height)
     throw std::invalid_argument("TsdfVolume::integrateDepth: depth size != width * height");
-  const TsdfConfig& cfg = impl_->config;
+  // Fused in the volume's frame: the camera's position and the depths scaled
+  // back by the map's scaling, the depth limits (map units) with them.
+  TsdfConfig cfg = impl_->config;
+  Eigen::Isometry3d T_w_c = T_map_c;
+  std::vector<float> scaled_depth;
+  if (!impl_->scaling.isIdentity()) {
+    const MapScaling to_volume = impl_->scaling.inverse();
+    T_w_c.translation() = to_volume.apply(T_map_c.translation());
+    const float k = static_cast<float>(to_volume.scale);
+    scaled_depth.resize(depth_map.size());
+    for (std::size_t i = 0; i < depth_map.size(); ++i) scaled_depth[i] = depth_map[i] * k;
+    cfg.min_depth *= to_volume.scale;
+    cfg.max_depth *= to_volume.scale;
+    cfg.weight_depth_ref *= to_volume.scale;
+  }
+  const std::vector<float>& depth = scaled_depth.empty() ? depth_map : scaled_depth;
   IntegrationStats stats;
   const camera::Pinhole& K = image.K;
   const int W = image.width, H = image.height, n = cfg.block_voxels;
@@ -202,7 +239,8 @@ IntegrationStats TsdfVolume::integrateDepth(const std::vector<float>& depth, con
   return stats;
 }
 
-const Voxel* TsdfVolume::voxelAt(const Eigen::Vector3d& p_w) const {
+const Voxel* TsdfVolume::voxelAt(const Eigen::Vector3d& p_map) const {
+  const Eigen::Vector3d p_w = impl_->scaling.isIdentity() ? p_map : impl_->scaling.inverse().apply(p_map);
   const int n = impl_->config.block_voxels;
   const Eigen::Vector3i g = (p_w / impl_->config.voxel_size).array().floor().cast<int>();
   const Eigen::Vector3i b(static_cast<int>(std::floor(static_cast<double>(g.x()) / n)),
@@ -217,7 +255,7 @@ const Voxel* TsdfVolume::voxelAt(const Eigen::Vector3d& p_w) const {
 bool TsdfVolume::sdfAt(const Eigen::Vector3d& p_w, double* sdf) const {
   const Voxel* v = voxelAt(p_w);
   if (!v || v->weight <= 0.0f) return false;
-  *sdf = v->sdf;
+  *sdf = v->sdf * impl_->scaling.scale;
   return true;
 }
 
@@ -231,7 +269,8 @@ void TsdfVolume::forEachVoxel(const std::function<void(const Eigen::Vector3d&, c
         for (int x = 0; x < n; ++x) {
           const Voxel& v = block->voxels[static_cast<std::size_t>(x + n * (y + n * z))];
           if (v.weight <= 0.0f) continue;
-          fn(((b * n + Eigen::Vector3i(x, y, z)).cast<double>().array() + 0.5).matrix() * vs, v);
+          const Eigen::Vector3d p_v = ((b * n + Eigen::Vector3i(x, y, z)).cast<double>().array() + 0.5).matrix() * vs;
+          fn(impl_->scaling.apply(p_v), v);
         }
   }
 }

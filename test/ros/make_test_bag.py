@@ -2,7 +2,7 @@
 """Makes the rostests' input: a short monocular sequence of a textured room with
 exact ground truth, as a rosbag.
 
-    make_test_bag.py OUT_DIR [--frames N] [--generator PATH] [--make-bag PATH]
+    make_test_bag.py OUT_DIR [--frames N] [--long-frames N] [--generator PATH] [--make-bag PATH]
 
 Writes OUT_DIR/sequence.bag (/cam0/image_raw, mono8, frame_id cam0),
 OUT_DIR/calibration.yaml (EuRoC sensor.yaml format) and OUT_DIR/groundtruth.tum
@@ -16,6 +16,9 @@ ROS-interface tests need: /imu0 synthesized by make_bag.sh --imu,
 generator's body is its camera; here the sequence gets EuRoC's body instead (its
 cam0 T_BS, x up), written as the body ground truth and the calibration's T_BS, so
 the camera -> IMU rotation is exercised as on EuRoC.
+
+--long-frames N: also OUT_DIR/long.bag and long_calibration.yaml, a sequence of N
+frames (the mesh stream's test: the camera goes on around the room).
 """
 import argparse
 import glob
@@ -186,18 +189,44 @@ def generate(out_dir, frames, generator, make_bag):
     shutil.copy(gt[0], os.path.join(out_dir, "groundtruth.tum"))
 
 
+def generate_long(out_dir, frames, generator, make_bag):
+    """OUT_DIR/long.bag: the generator's room, `frames` frames (the camera goes on around the
+    room: the mesh grows), and OUT_DIR/long_calibration.yaml."""
+    seq = os.path.join(out_dir, "generated_long")
+    shutil.rmtree(seq, ignore_errors=True)
+    subprocess.check_call([generator, "--out", seq, "--frames", str(frames), "--width", str(WIDTH),
+                           "--height", str(HEIGHT)])
+    subprocess.check_call([make_bag, seq, os.path.join(out_dir, "long.bag")])
+    sensor = glob.glob(os.path.join(seq, "**", "cam0", "sensor.yaml"), recursive=True)
+    if not sensor:
+        sys.exit("make_test_bag.py: generator output lacks cam0/sensor.yaml")
+    shutil.copy(sensor[0], os.path.join(out_dir, "long_calibration.yaml"))
+    shutil.rmtree(seq, ignore_errors=True)
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("out_dir")
     parser.add_argument("--frames", type=int, default=60)
+    parser.add_argument("--long-frames", type=int, default=0,
+                        help="also long.bag of this many frames (needs --generator)")
     parser.add_argument("--generator", default="")
     parser.add_argument("--make-bag", default="")
     args = parser.parse_args()
     os.makedirs(args.out_dir, exist_ok=True)
     if args.generator and os.path.exists(args.generator):
         generate(args.out_dir, args.frames, args.generator, args.make_bag)
+        if args.long_frames > 0:
+            generate_long(args.out_dir, args.long_frames, args.generator, args.make_bag)
     else:
         draw(args.out_dir, args.frames)
+        if args.long_frames > 0:
+            tmp = os.path.join(args.out_dir, "drawn_long")
+            os.makedirs(tmp, exist_ok=True)
+            draw(tmp, args.long_frames)
+            shutil.move(os.path.join(tmp, "sequence.bag"), os.path.join(args.out_dir, "long.bag"))
+            shutil.move(os.path.join(tmp, "calibration.yaml"), os.path.join(args.out_dir, "long_calibration.yaml"))
+            shutil.rmtree(tmp, ignore_errors=True)
     print("make_test_bag.py: %d frames in %s" % (args.frames, args.out_dir))
 
 

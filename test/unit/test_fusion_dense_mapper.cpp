@@ -8,6 +8,15 @@
 using namespace vitamin_e;
 
 namespace {
+
+fusion::DenseFrame denseFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
+                              const Eigen::Isometry3d& T_w_c) {
+  fusion::DenseFrame f;
+  f.ids = ids;
+  f.p_c = p_c;
+  f.T_w_c = T_w_c;
+  return f;
+}
 meshing::PinholeImage image() { return {{400.0, 400.0, 320.0, 240.0}, 640, 480}; }
 
 // Points on the plane z = 3 (world) seen by a camera at T_w_c looking along +z.
@@ -86,7 +95,7 @@ TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
     T_w_c.translation() = Eigen::Vector3d(0.08 * k, -0.03 * k, 0.0);
     planePoints(T_w_c, &rng, &ids, &p_c);
     inline_mapper.addFrame(ids, p_c, T_w_c);
-    threaded.submitFrame(ids, p_c, T_w_c, 2);
+    threaded.submitFrame(denseFrame(ids, p_c, T_w_c), 2);
   }
   const fusion::TriangleMesh a = inline_mapper.extractMesh();
   const fusion::TriangleMesh b = threaded.extractMesh();  // waits for the meshing thread
@@ -101,7 +110,7 @@ TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
   EXPECT_EQ(threaded.integratorStats().integrated, static_cast<std::size_t>(frames));
   EXPECT_EQ(threaded.integratorStats().dropped, 0u);
   ids.pop_back();
-  EXPECT_THROW(threaded.submitFrame(ids, p_c, Eigen::Isometry3d::Identity()), std::invalid_argument);
+  EXPECT_THROW(threaded.submitFrame(denseFrame(ids, p_c, Eigen::Isometry3d::Identity())), std::invalid_argument);
 }
 
 TEST(DenseMapper, ResetDropsWaitingFramesAndKeepsWorking) {
@@ -114,14 +123,14 @@ TEST(DenseMapper, ResetDropsWaitingFramesAndKeepsWorking) {
   fusion::DenseMapper mapper(cfg, image());
   for (int k = 0; k < 3; ++k) {
     planePoints(Eigen::Isometry3d::Identity(), &rng, &ids, &p_c);
-    mapper.submitFrame(ids, p_c, Eigen::Isometry3d::Identity(), 8);
+    mapper.submitFrame(denseFrame(ids, p_c, Eigen::Isometry3d::Identity()), 8);
   }
   mapper.reset();  // drops what waits, keeps working afterwards
   planePoints(Eigen::Isometry3d::Identity(), &rng, &ids, &p_c);
-  mapper.submitFrame(ids, p_c, Eigen::Isometry3d::Identity());
+  mapper.submitFrame(denseFrame(ids, p_c, Eigen::Isometry3d::Identity()));
   mapper.flush();
   EXPECT_GE(mapper.workStats().meshed, 1u);
-  for (int k = 0; k < 3; ++k) mapper.submitFrame(ids, p_c, Eigen::Isometry3d::Identity(), 8);
+  for (int k = 0; k < 3; ++k) mapper.submitFrame(denseFrame(ids, p_c, Eigen::Isometry3d::Identity()), 8);
 }  // destroyed with frames waiting: they are finished, then the thread joins
 
 int main(int argc, char** argv) {

@@ -90,6 +90,7 @@ bool writeBinaryFile(const std::string& path, const std::string& header_line, co
 struct BinaryFileContents {
   std::string header_line;  // without the newline
   std::string payload;      // checked against its size and checksum
+  int version = 0;          // the format version of the header line
 };
 
 // Reads a file written by writeBinaryFile whose header line starts with
@@ -99,5 +100,8 @@ struct BinaryFileContents {
 // corrupt. `kind` names the file type in messages ("map", "TSDF").
 BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind,
                                   int version);
+// The same for a reader of several format versions, oldest_version..newest_version.
+BinaryFileContents readBinaryFile(const std::string& path, const std::string& magic, const std::string& kind,
+                                  int oldest_version, int newest_version);
 
 }  // namespace vitamin_e

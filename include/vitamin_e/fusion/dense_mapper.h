@@ -4,10 +4,14 @@
 // pinhole image (meshing::FrameMesher) -> NLTGV2-L1 smoothing of the inverse
 // depths (meshing::NltgvDenoiser, warm-started by track id) -> pruning of bad
 // triangles -> TSDF fusion (fusion::TsdfIntegrator, on its own thread unless
-// configured synchronous) -> marching cubes on demand. Used by the offline
-// runner and the ROS meshing nodelet. addFrame() meshes on the caller's thread;
-// submitFrame() hands the whole frame to the mapper's meshing thread (off the
-// SLAM's critical path), in order, never dropping one.
+// configured synchronous) -> marching cubes on demand. The one dense stage of
+// the offline runner and of the ROS meshing nodelet: both give it the
+// DenseFrame that pipeline::DenseInput makes of each SLAM result (the nodelet
+// receives it as a vitamin_e/TrackedFrame message). addFrame() meshes on the
+// caller's thread; submitFrame() hands the whole frame to the mapper's meshing
+// thread (off the SLAM's critical path), in order, never dropping one. When the
+// map is rescaled (a ground-scale correction) the volume is rescaled with it
+// before the frame is fused: the mesh stays in one scale, the map's current one.
 #include <Eigen/Geometry>
 #include <condition_variable>
 #include <cstdint>
@@ -40,6 +44,18 @@ struct DenseMapperConfig {
   void validate() const;  // throws std::invalid_argument naming the key
 };
 
+// One frame's input: its triangulated points in its camera frame with their
+// track ids, its pose, and the map's scaling since the input began (the
+// composition of the map's rescales: map coordinates now = map_scaling.apply(map
+// coordinates then)), so that a frame left out does not lose a rescale.
+struct DenseFrame {
+  std::uint64_t frame_index = 0;
+  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
+  std::vector<std::uint64_t> ids;
+  std::vector<Eigen::Vector3d> p_c;  // p_c[i]: the point of track ids[i], camera frame, map units
+  MapScaling map_scaling;
+};
+
 struct DenseFrameStats {
   bool integrated = false;
   std::size_t vertices = 0;
@@ -61,37 +77,44 @@ class DenseMapper {
  public:
   DenseMapper(const DenseMapperConfig& config, const meshing::PinholeImage& image);
 
+  // The map's scaling first (rescale by what it changed since the last frame
+  // given), then the points. Throws std::invalid_argument for a bad frame
+  // (ids and points of different sizes, a scaling that is not finite and positive).
+  DenseFrameStats addFrame(const DenseFrame& frame);
   // ids[i] is the track id of p_c[i] (camera frame, map units).
   DenseFrameStats addFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
                            const Eigen::Isometry3d& T_w_c);
-  // The same work as addFrame on the mapper's meshing thread (started at the
-  // first call): returns at once unless `max_waiting` frames already wait, then
-  // blocks until one is taken. Frames are meshed in submission order, none
-  // dropped (the TSDF integrator's own queue rules still apply). Throws like
-  // addFrame for mismatched sizes. Do not mix with addFrame between flush()es.
-  void submitFrame(std::vector<std::uint64_t> ids, std::vector<Eigen::Vector3d> p_c, const Eigen::Isometry3d& T_w_c,
-                   std::size_t max_waiting = 4);
+  // The same work as addFrame(DenseFrame) on the mapper's meshing thread
+  // (started at the first call): returns at once unless `max_waiting` frames
+  // already wait, then blocks until one is taken. Frames are meshed in
+  // submission order, none dropped (the TSDF integrator's own queue rules still
+  // apply). Throws like addFrame for a bad frame. Do not mix with addFrame
+  // between flush()es.
+  void submitFrame(DenseFrame frame, std::size_t max_waiting = 4);
   DenseWorkStats workStats() const;
   ~DenseMapper();  // finishes the submitted frames, then joins the meshing thread
   DenseMapper(const DenseMapper&) = delete;
   DenseMapper& operator=(const DenseMapper&) = delete;
+  // The map was scaled by `factor` about `centre` (map coordinates): so is the
+  // TSDF, after the frames given before and before the later ones.
+  void rescale(const Eigen::Vector3d& centre, double factor);
   void flush();  // waits for the submitted frames to be meshed and the queued ones to be fused
   TriangleMesh extractMesh();
+  // The surface of the voxel blocks that changed since the last call, of the
+  // frames fused so far (TsdfVolume::takeChangedBlocks; does not wait for the queue).
+  MeshBlockUpdate takeChangedBlocks();
   bool saveMesh(const std::string& path, std::string* error = nullptr);
   // The TSDF's voxel blocks to / from a file (TsdfVolume::save / load): a run
   // that loads the file of an earlier run in the same map starts with its mesh.
   bool saveTsdf(const std::string& path, std::string* error = nullptr);
   void loadTsdf(const std::string& path);  // throws fusion::TsdfFileError
   TsdfIntegratorStats integratorStats() const;
-  void reset();
+  void reset();  // an empty volume for a new map: no surface, no scaling, DenseFrame::map_scaling from identity
   const DenseMapperConfig& config() const { return config_; }
+  // Volume -> map coordinates, as submitted (identity until a rescale or a loaded TSDF with one).
+  const MapScaling& scaling() const { return scaling_; }
 
  private:
-  struct Submitted {
-    std::vector<std::uint64_t> ids;
-    std::vector<Eigen::Vector3d> p_c;
-    Eigen::Isometry3d T_w_c;
-  };
   void meshLoop();
   void waitMeshed();
 
@@ -104,11 +127,14 @@ class DenseMapper {
   // the meshing thread of submitFrame()
   mutable std::mutex work_mutex_;
   std::condition_variable work_cv_, done_cv_;
-  std::deque<Submitted> work_;
+  std::deque<DenseFrame> work_;
   bool working_ = false;
   bool stop_ = false;
   DenseWorkStats work_stats_;
   std::thread mesher_thread_;
+  // Touched by whichever thread meshes (the caller's with addFrame, the meshing thread's with submitFrame).
+  MapScaling scaling_;        // the volume's, as submitted to the integrator
+  MapScaling input_scaling_;  // DenseFrame::map_scaling of the last frame
 };
 
 }  // namespace vitamin_e::fusion

@@ -2,8 +2,9 @@
 // Runs TsdfVolume integration off the caller's thread: submit() enqueues a
 // frame mesh with its pose into a bounded queue consumed by an owned worker
 // thread (when full, the oldest queued frame is dropped, or submit() blocks if
-// configured). In synchronous mode submit() integrates immediately.
-// extractMesh() / saveMesh() may be called from any thread.
+// configured). In synchronous mode submit() integrates immediately. A change
+// of the map's scaling is queued in order with the frames and never dropped.
+// extractMesh() / saveMesh() / takeChangedBlocks() may be called from any thread.
 #include <condition_variable>
 #include <deque>
 #include <mutex>
@@ -38,24 +39,31 @@ class TsdfIntegrator {
   TsdfIntegrator& operator=(const TsdfIntegrator&) = delete;
 
   void submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c, const meshing::PinholeImage& image);
+  // TsdfVolume::setScaling after the frames submitted so far, before the later ones.
+  void submitScaling(const MapScaling& volume_to_map);
   // Blocks until every submitted frame is integrated (or dropped).
   void flush();
   TriangleMesh extractMesh();
+  // TsdfVolume::takeChangedBlocks of the frames fused so far (without waiting for the queue).
+  MeshBlockUpdate takeChangedBlocks();
   bool saveMesh(const std::string& path, std::string* error = nullptr);
   TsdfIntegratorStats stats() const;
   void reset();  // clears the queue and the volume
   // TsdfVolume::save / load of the volume (after the queued frames are fused).
   bool saveVolume(const std::string& path, std::string* error = nullptr);
-  void loadVolume(const std::string& path);  // throws TsdfFileError
+  MapScaling loadVolume(const std::string& path);  // throws TsdfFileError; returns the file's scaling
 
  private:
   struct Job {
     meshing::FrameMesh mesh;
     Eigen::Isometry3d T_w_c;
     meshing::PinholeImage image;
+    bool is_scaling = false;  // not a frame: the volume's scaling becomes `scaling`
+    MapScaling scaling;
   };
   void run();
   void integrateJob(const Job& job);
+  void enqueue(Job job);
 
   TsdfIntegratorConfig config_;
   TsdfVolume volume_;

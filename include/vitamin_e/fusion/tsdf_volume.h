@@ -11,6 +11,14 @@
 // call (and their lower neighbours, which read their voxels), reusing the
 // cached triangles of the other blocks; vertices are shared across cubes and
 // blocks, so a closed surface gives a closed mesh.
+// The voxels stay in the volume's own frame, from which scaling() maps to the
+// map's coordinates: the identity until the map is rescaled (setScaling,
+// rescale: a ground-scale correction of a monocular map), which moves the whole
+// surface at once without touching a voxel. Every argument and result is in map
+// coordinates; the voxel size and the truncation are in the volume's units (map
+// units when it started, scaled with the map since).
+// takeChangedBlocks() hands out the surface of the blocks that changed since
+// its last call, for a consumer that keeps a copy (a mesh stream).
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
@@ -19,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "vitamin_e/fusion/map_scaling.h"
 #include "vitamin_e/fusion/triangle_mesh.h"
 #include "vitamin_e/meshing/frame_mesh.h"
 #include "vitamin_e/meshing/pinhole_image.h"
@@ -26,7 +35,8 @@
 namespace vitamin_e::fusion {
 
 struct TsdfConfig {
-  // Lengths are in the unit of the poses and depths given: map units in the SLAM.
+  // Lengths are in the unit of the poses and depths given: map units in the SLAM
+  // (voxel_size and truncation: as the volume started, see TsdfVolume::scaling).
   double voxel_size = 0.05;
   double truncation = 0.15;   // band half-width around the surface
   double max_weight = 100.0;  // cap of the running weight
@@ -49,6 +59,22 @@ struct TsdfFileError : std::runtime_error {
 struct Voxel {
   float sdf = 0.0f;     // in [-truncation, truncation]; > 0 in front of the surface
   float weight = 0.0f;  // 0: never observed
+};
+
+// The surface inside one voxel block: a triangle soup (three vertices per
+// triangle, map coordinates). The triangles of all blocks are those of
+// TsdfVolume::extractMesh().
+struct MeshBlock {
+  Eigen::Vector3i index = Eigen::Vector3i::Zero();  // the block's place in the volume: stable while it lives
+  std::vector<Eigen::Vector3f> vertices;
+};
+
+// What changed in the surface since the last TsdfVolume::takeChangedBlocks().
+struct MeshBlockUpdate {
+  // Every block given before is void (the first call, after clear() or load()):
+  // `blocks` is the whole surface.
+  bool replace_all = false;
+  std::vector<MeshBlock> blocks;  // sorted by index; a block without vertices has lost its surface
 };
 
 struct IntegrationStats {
@@ -85,26 +111,39 @@ class TsdfVolume {
   TriangleMesh extractMesh();
   // Number of blocks re-meshed by the last updateMesh() / extractMesh().
   std::size_t lastRemeshedBlocks() const;
+  // updateMesh(), then the blocks whose triangles changed since the last call
+  // (all of them after a rescale). A block never reported with a surface is not
+  // reported empty.
+  MeshBlockUpdate takeChangedBlocks();
 
-  // Voxel at a world point (nullptr if its block is not allocated).
+  // The map was scaled: map coordinates = volume_to_map.apply(the volume's own).
+  void setScaling(const MapScaling& volume_to_map);
+  // The map was scaled by `factor` about `centre` (map coordinates), on top of the scaling so far.
+  void rescale(const Eigen::Vector3d& centre, double factor);
+  const MapScaling& scaling() const;
+
+  // Voxel at a world point (nullptr if its block is not allocated); its sdf is
+  // in the volume's units (times scaling().scale: map units).
   const Voxel* voxelAt(const Eigen::Vector3d& p_w) const;
-  // Sdf of the voxel containing p_w; false if unobserved.
+  // Sdf of the voxel containing p_w in map units; false if unobserved.
   bool sdfAt(const Eigen::Vector3d& p_w, double* sdf) const;
-  // All voxels (centre in world, value) with weight > 0, for tests and debugging.
+  // All voxels (centre in world, value as voxelAt) with weight > 0, for tests and debugging.
   void forEachVoxel(const std::function<void(const Eigen::Vector3d&, const Voxel&)>& fn) const;
 
   std::size_t numBlocks() const;
-  void clear();
+  void clear();  // no block, the identity scaling
 
   // The voxel blocks in a file (src/fusion/tsdf_file.cpp): a readable first
   // line "vitamin_e tsdf v1, N blocks, voxel V, B^3 voxels per block", then the
-  // checked binary blocks (common/binary_file.h), written atomically. False
-  // (and *error) when it cannot be written.
+  // checked binary blocks (common/binary_file.h), written atomically; "v2" when
+  // the volume has a scaling, which the file then holds. False (and *error)
+  // when it cannot be written.
   bool save(const std::string& path, std::string* error = nullptr) const;
-  // Replaces the blocks with a file's, so that a later run starts with the
-  // surface of an earlier one (in the same map's frame and scale). The file's
-  // voxel size, block size and truncation must be this volume's. Throws
-  // TsdfFileError naming the file and the problem; the volume is then unchanged.
+  // Replaces the blocks (and the scaling) with a file's, so that a later run
+  // starts with the surface of an earlier one (in the same map's frame and
+  // scale). The file's voxel size, block size and truncation must be this
+  // volume's. Throws TsdfFileError naming the file and the problem; the volume
+  // is then unchanged.
   void load(const std::string& path);
   const TsdfConfig& config() const;
 

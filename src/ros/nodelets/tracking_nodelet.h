@@ -47,6 +47,7 @@
 
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackingConfig.h"
+#include "vitamin_e/pipeline/dense_input.h"
 #include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/ros/map_frame.h"
 #include "vitamin_e/ros/slam_queue.h"
@@ -124,7 +125,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   void publishPath(const geometry_msgs::PoseStampedConstPtr& stamped);
   void publishTf(const Eigen::Isometry3d& T_map_c, const ros::Time& stamp);
   void publishPoints(const vitamin_e::pipeline::FrameResult& result, const std_msgs::Header& header);
-  void publishFrame(const vitamin_e::pipeline::FrameResult& result, const std_msgs::Header& header);
+  void publishFrame(const vitamin_e::fusion::DenseFrame& frame, const std_msgs::Header& header);
   void publishMapPoints(const ros::Time& stamp);
   void publishTrackingImage(const vitamin_e::pipeline::FrameResult& result, const std_msgs::Header& header,
                             const cv::Mat& gray);
@@ -192,6 +193,9 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::map<std::uint64_t, std::deque<cv::Point2f>> track_history_;
   std::string segment_note_ = "start";
   unsigned segment_ = 1;
+  // The mesher's input (~frame): every result goes through it, for the map's scale corrections.
+  vitamin_e::pipeline::DenseInput dense_input_;
+  unsigned dense_input_segment_ = 1;
   std::size_t finished_processed_ = 0, finished_tracked_ = 0;
   int finished_retries_ = 0, finished_relocalizations_ = 0;
   // The map frame of the current segment: T_map_w once the first pose exists.

@@ -16,6 +16,7 @@
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/ros/conversions.h"
+#include "vitamin_e/ros/dense_frame_msg.h"
 
 namespace vitamin_e_ros {
 
@@ -64,12 +65,20 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
     while (stats_.processed_wall.size() > 2000) stats_.processed_wall.pop_front();
   }
 
+  // Every result goes through the mesher's input, which adds up the map's scale corrections; the
+  // points only when the mesher listens.
+  if (dense_input_segment_ != segment_) {
+    dense_input_.reset();  // a new map
+    dense_input_segment_ = segment_;
+  }
+  const bool to_mesher = frame_pub_.getNumSubscribers() > 0;
+  const vitamin_e::fusion::DenseFrame dense = dense_input_.next(result, to_mesher && result.pose_valid);
   if (result.pose_valid) {
     if (isFinite(result.T_w_c)) {
       publishPose(result, header);
       if (options_.publish_tf) publishTf(result.T_w_c, header.stamp);
       if (options_.publish_points && points_pub_.getNumSubscribers() > 0) publishPoints(result, header);
-      if (frame_pub_.getNumSubscribers() > 0) publishFrame(result, header);
+      if (to_mesher) publishFrame(dense, header);
     } else {
       NODELET_ERROR_THROTTLE(2.0, "frame %lu: non-finite pose not published",
                              static_cast<unsigned long>(result.frame_index));
@@ -199,38 +208,12 @@ void TrackingNodelet::publishPoints(const FrameResult& result, const std_msgs::H
   points_pub_.publish(cloud);
 }
 
-void TrackingNodelet::publishFrame(const FrameResult& result, const std_msgs::Header& header) {
+void TrackingNodelet::publishFrame(const vitamin_e::fusion::DenseFrame& dense, const std_msgs::Header& header) {
   vitamin_e::TrackedFramePtr frame(new vitamin_e::TrackedFrame);
+  toTrackedFrameMsg(dense, system_->camera(), frame.get());
   frame->header.stamp = header.stamp;
   frame->header.frame_id = map_frame_;
-  frame->T_w_c = toPoseMsg(result.T_w_c);
-  frame->frame_index = result.frame_index;
   frame->segment = segment_;
-  const auto& camera = system_->camera();
-  frame->width = static_cast<uint32_t>(camera.width());
-  frame->height = static_cast<uint32_t>(camera.height());
-  frame->fx = camera.fx();
-  frame->fy = camera.fy();
-  frame->cx = camera.cx();
-  frame->cy = camera.cy();
-  frame->distortion_model = distortionName(camera.model());
-  frame->distortion = camera.distortion();
-  const Eigen::Isometry3d T_c_w = result.T_w_c.inverse();
-  for (const auto& p : result.points) {
-    if (!p.has_position || !isFinite(p.p_w) || !p.uv.allFinite()) continue;
-    const Eigen::Vector3d p_c = T_c_w * p.p_w;
-    if (!(p_c.z() > 0.0)) continue;
-    geometry_msgs::Point32 q;
-    q.x = static_cast<float>(p_c.x());
-    q.y = static_cast<float>(p_c.y());
-    q.z = static_cast<float>(p_c.z());
-    frame->ids.push_back(p.track_id);
-    frame->u.push_back(p.uv.x());
-    frame->v.push_back(p.uv.y());
-    frame->depth.push_back(q.z);
-    frame->points_c.push_back(q);
-    frame->intensity.push_back(p.intensity);
-  }
   frame_pub_.publish(vitamin_e::TrackedFrameConstPtr(frame));  // zero copy inside one manager
 }
 

@@ -1,12 +1,15 @@
 // vitamin_e/TsdfMeshingNodelet: per-frame messages of TrackingNodelet (~frame) in,
-// TSDF mesh out. Each frame's points go through fusion::DenseMapper (the same
-// path as the offline runner: Delaunay mesh, NLTGV smoothing, pruning, TSDF
-// fusion on its own thread); the zero level set is published every
-// ~publish_period as a chunked MarkerArray of TRIANGLE_LISTs. The dense settings
-// come from the "dense" section of ~config_file (the SLAM config, map units)
-// alone, as in the offline runner. ~load_tsdf: the TSDF of an earlier run (in
-// the same map) fused into from the start, its mesh published at once;
-// ~save_tsdf: written on shutdown (and by the ~save_tsdf service).
+// TSDF mesh out. Each message is the dense stage's input (fusion::DenseFrame, as
+// vitamin_e_run makes it: pipeline::DenseInput) and goes through fusion::DenseMapper
+// (Delaunay mesh, NLTGV smoothing, pruning, TSDF fusion on its own thread; the
+// volume follows the map's rescales). Every ~publish_period the voxel blocks whose
+// surface changed are published as one TRIANGLE_LIST marker each (stable ids: rviz
+// replaces them); a subscriber that connects gets every block at once, and
+// ~republish_mesh sends them all again. The dense settings come from the "dense"
+// section of ~config_file (the SLAM config, map units) alone, as in the offline
+// runner. ~load_tsdf: the TSDF of an earlier run (in the same map) fused into from
+// the start, its mesh published at once; ~save_tsdf: written on shutdown (and by
+// the ~save_tsdf service).
 #include <exception>
 #include <memory>
 #include <mutex>
@@ -15,6 +18,7 @@
 #include <dynamic_reconfigure/server.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
+#include <std_srvs/Trigger.h>
 #include <visualization_msgs/MarkerArray.h>
 #include <pluginlib/class_list_macros.hpp>
 
@@ -25,7 +29,7 @@
 #include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
 #include "vitamin_e/pipeline/system_config.h"
-#include "vitamin_e/ros/conversions.h"
+#include "vitamin_e/ros/dense_frame_msg.h"
 #include "vitamin_e/ros/mesh_markers.h"
 
 namespace vitamin_e_ros {
@@ -75,6 +79,9 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
         NODELET_ERROR("~%s is not read: set dense.%s in ~config_file (docs/CONFIG.md)", old, old);
       }
     }
+    if (pnh.hasParam("triangles_per_marker")) {
+      NODELET_ERROR("~triangles_per_marker is not read: ~mesh has one marker per TSDF block (docs/ROS.md)");
+    }
     return p;
   }
 
@@ -117,7 +124,11 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     NODELET_INFO("TSDF voxel %.3f, truncation %.3f, depth [%.2f, %.2f] (map units), NLTGV %s", tsdf.voxel_size,
                  tsdf.truncation, tsdf.min_depth, tsdf.max_depth, dense_config_.denoise ? "on" : "off");
 
-    mesh_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("mesh", 1, true);
+    // Not latched: a latched message would be the last change only. A subscriber
+    // that connects gets every block instead (onMeshSubscriber).
+    mesh_pub_ = pnh.advertise<visualization_msgs::MarkerArray>(
+        "mesh", 100, [this](const ros::SingleSubscriberPublisher& pub) { onMeshSubscriber(pub); });
+    republish_srv_ = pnh.advertiseService("republish_mesh", &TsdfMeshingNodelet::republishService, this);
     save_srv_ = pnh.advertiseService("save_mesh", &TsdfMeshingNodelet::saveMeshService, this);
     save_tsdf_srv_ = pnh.advertiseService("save_tsdf", &TsdfMeshingNodelet::saveTsdfService, this);
     reconfigure_server_ =
@@ -133,10 +144,22 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     NODELET_INFO("fusing frames from %s", frame_sub_.getTopic().c_str());
   }
 
+  MeshMarkerOptions markerOptions() const {
+    MeshMarkerOptions options;
+    options.frame_id = map_frame_.empty() ? "map" : map_frame_;
+    options.color_by_height = dyn_.color_by_height;
+    options.height_color_period = dyn_.height_color_period;
+    options.min_vertex_move = dyn_.min_vertex_move * dense_config_.integrator.tsdf.voxel_size;
+    return options;
+  }
+
   void reconfigure(vitamin_e::TsdfMeshingConfig& config, uint32_t) {
     std::lock_guard<std::mutex> lock(mutex_);
     const bool period_changed = config.publish_period != dyn_.publish_period || !timer_.isValid();
     dyn_ = config;
+    if (markers_.setOptions(markerOptions()) && mesh_pub_.getNumSubscribers() > 0) {
+      mesh_pub_.publish(markers_.full());  // recoloured
+    }
     if (!period_changed) return;
     timer_.stop();
     if (dyn_.publish_period > 0.0) {
@@ -146,40 +169,33 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   }
 
   void frameCallback(const vitamin_e::TrackedFrameConstPtr& msg) {
-    const std::size_t n = msg->ids.size();
-    if (msg->points_c.size() != n || msg->width == 0 || msg->height == 0) {
-      NODELET_ERROR_THROTTLE(2.0, "malformed frame %lu dropped (%zu ids, %zu points, %ux%u)",
-                             static_cast<unsigned long>(msg->frame_index), n, msg->points_c.size(), msg->width,
-                             msg->height);
+    fusion::DenseFrame frame;
+    meshing::PinholeImage image;
+    std::string why;
+    if (!fromTrackedFrameMsg(*msg, &frame, &image, &why)) {
+      NODELET_ERROR_THROTTLE(2.0, "frame %lu dropped: %s", static_cast<unsigned long>(msg->frame_index), why.c_str());
       return;
     }
-    const Eigen::Isometry3d T_w_c = fromPoseMsg(msg->T_w_c);
-    if (!isFinite(T_w_c)) {
-      NODELET_ERROR_THROTTLE(2.0, "frame %lu with a non-finite pose dropped",
-                             static_cast<unsigned long>(msg->frame_index));
-      return;
-    }
-    const meshing::PinholeImage image{{msg->fx, msg->fy, msg->cx, msg->cy},
-                                      static_cast<int>(msg->width),
-                                      static_cast<int>(msg->height)};
-    std::vector<Eigen::Vector3d> p_c;
-    p_c.reserve(n);
-    for (const auto& p : msg->points_c) p_c.emplace_back(p.x, p.y, p.z);
-
     std::lock_guard<std::mutex> lock(mutex_);
     if (!config_ok_) return;
-    if (map_frame_.empty()) map_frame_ = msg->header.frame_id.empty() ? "map" : msg->header.frame_id;
+    if (map_frame_.empty()) {
+      map_frame_ = msg->header.frame_id.empty() ? "map" : msg->header.frame_id;
+      markers_.setOptions(markerOptions());
+    }
     if (dense_ && msg->segment != segment_) {
       // The tracker restarted (~reset, a stamp jumping back): a new map, so a new volume.
       NODELET_INFO("tracking segment %u: a new map, the TSDF starts over (%zu frames fused before)", msg->segment,
                    frames_integrated_);
       dense_.reset();
       frames_integrated_ = 0;
-      changed_ = true;
+      if (mesh_pub_.getNumSubscribers() > 0) {
+        mesh_pub_.publish(markers_.clear(ros::Time::now()));
+      } else {
+        markers_.clear(ros::Time::now());
+      }
     }
     segment_ = msg->segment;
     try {
-      image.validate();
       if (!dense_) {
         dense_ = std::make_unique<fusion::DenseMapper>(dense_config_, image);
         dense_image_ = image;
@@ -192,32 +208,51 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
                                static_cast<unsigned long>(msg->frame_index));
         return;
       }
-      if (dense_->addFrame(msg->ids, p_c, T_w_c).integrated) {
-        ++frames_integrated_;
-        changed_ = true;
-      }
+      if (dense_->addFrame(frame).integrated) ++frames_integrated_;
     } catch (const std::exception& e) {
       NODELET_ERROR_THROTTLE(2.0, "frame %lu not fused: %s", static_cast<unsigned long>(msg->frame_index), e.what());
     }
   }
 
+  // The blocks changed since the last publication. While nobody listens they
+  // wait in the volume (a subscriber gets the markers kept so far on connecting,
+  // then this).
   void publishTimer(const ros::WallTimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!dense_ || !changed_ || mesh_pub_.getNumSubscribers() == 0) return;
-    changed_ = false;
-    const fusion::TriangleMesh mesh = dense_->extractMesh();
-    MeshMarkerOptions options;
-    options.frame_id = map_frame_.empty() ? "map" : map_frame_;
-    options.stamp = ros::Time::now();
-    options.triangles_per_marker = static_cast<std::size_t>(dyn_.triangles_per_marker);
-    options.color_by_height = dyn_.color_by_height;
-    visualization_msgs::MarkerArrayPtr markers(new visualization_msgs::MarkerArray);
+    if (!dense_ || mesh_pub_.getNumSubscribers() == 0) return;
+    publishUpdate(dense_->takeChangedBlocks());
+  }
+
+  void publishUpdate(const fusion::MeshBlockUpdate& update) {
     std::size_t skipped = 0;
-    published_markers_ = meshToMarkers(mesh, options, published_markers_, markers.get(), &skipped);
+    visualization_msgs::MarkerArrayPtr markers(new visualization_msgs::MarkerArray);
+    *markers = markers_.update(update, ros::Time::now(), &skipped);
     if (skipped > 0) NODELET_ERROR_THROTTLE(2.0, "%zu non-finite triangles not published", skipped);
+    if (markers->markers.empty()) return;
     mesh_pub_.publish(visualization_msgs::MarkerArrayConstPtr(markers));
-    NODELET_DEBUG("mesh: %zu vertices, %zu triangles, %zu markers, %zu frames fused", mesh.vertices.size(),
-                  mesh.faces.size(), published_markers_, frames_integrated_);
+    NODELET_DEBUG("mesh: %zu changed blocks sent; %zu blocks, %zu triangles in all; %zu frames fused",
+                  update.blocks.size(), markers_.numMarkers(), markers_.numTriangles(), frames_integrated_);
+  }
+
+  // A new subscriber (a late rviz): every block sent so far, to it alone.
+  void onMeshSubscriber(const ros::SingleSubscriberPublisher& pub) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (markers_.numMarkers() == 0) return;
+    pub.publish(markers_.full());
+    NODELET_DEBUG("mesh: %zu blocks sent to %s", markers_.numMarkers(), pub.getSubscriberName().c_str());
+  }
+
+  bool republishService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (dense_) {
+      const fusion::MeshBlockUpdate update = dense_->takeChangedBlocks();
+      markers_.update(update, ros::Time::now());  // the changes since the last publication, into the copy
+    }
+    mesh_pub_.publish(markers_.full());
+    res.success = true;
+    res.message = std::to_string(markers_.numMarkers()) + " blocks (" + std::to_string(markers_.numTriangles()) +
+                  " triangles) sent to " + std::to_string(mesh_pub_.getNumSubscribers()) + " subscribers";
+    return true;
   }
 
   bool saveMesh(const std::string& path, std::string* message) {
@@ -229,23 +264,16 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     }
     *message = "mesh (" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.faces.size()) +
                " triangles, " + std::to_string(frames_integrated_) + " frames, PLY) written to " + path;
-    changed_ = true;  // extractMesh consumed the change set: republish on the next tick
     return true;
   }
 
-  // The mesh of ~load_tsdf, published (latched) before any frame arrives.
+  // The mesh of ~load_tsdf, published before any frame arrives (and kept for
+  // subscribers that connect later).
   void publishLoadedMesh() {
-    const fusion::TriangleMesh mesh = loaded_tsdf_->extractMesh();
-    MeshMarkerOptions options;
-    options.frame_id = map_frame_.empty() ? "map" : map_frame_;
-    options.stamp = ros::Time::now();
-    options.triangles_per_marker = static_cast<std::size_t>(dyn_.triangles_per_marker);
-    options.color_by_height = dyn_.color_by_height;
-    visualization_msgs::MarkerArrayPtr markers(new visualization_msgs::MarkerArray);
-    std::size_t skipped = 0;
-    published_markers_ = meshToMarkers(mesh, options, published_markers_, markers.get(), &skipped);
-    mesh_pub_.publish(visualization_msgs::MarkerArrayConstPtr(markers));
-    NODELET_INFO("mesh of %s published: %zu triangles", load_tsdf_.c_str(), mesh.faces.size());
+    markers_.setOptions(markerOptions());
+    publishUpdate(loaded_tsdf_->takeChangedBlocks());
+    NODELET_INFO("mesh of %s published: %zu triangles in %zu blocks", load_tsdf_.c_str(), markers_.numTriangles(),
+                 markers_.numMarkers());
   }
 
   bool saveTsdf(const std::string& path, std::string* message) {
@@ -292,12 +320,11 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   std::unique_ptr<fusion::DenseMapper> dense_;  // made at the first frame (its intrinsics)
   meshing::PinholeImage dense_image_;
   std::size_t frames_integrated_ = 0;
-  std::size_t published_markers_ = 0;
-  unsigned segment_ = 0;  // the tracker's segment of the frames fused
-  bool changed_ = false;
+  MeshBlockMarkers markers_;  // the blocks published so far
+  unsigned segment_ = 0;      // the tracker's segment of the frames fused
   ros::Subscriber frame_sub_;
   ros::Publisher mesh_pub_;
-  ros::ServiceServer save_srv_, save_tsdf_srv_;
+  ros::ServiceServer save_srv_, save_tsdf_srv_, republish_srv_;
   ros::WallTimer timer_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<vitamin_e::TsdfMeshingConfig>> reconfigure_server_;
