@@ -26,6 +26,8 @@ if(CATKIN_ENABLE_TESTING)
   # ./scripts/bench_pipeline_report.py on made-up run folders (seconds).
   add_test(NAME script_bench_pipeline_report
            COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_bench_pipeline_report.sh)
+  # ./scripts/config_sweep.py with stand-in binaries (seconds).
+  add_test(NAME script_config_sweep COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_config_sweep.sh)
   # Tests of the offline tools and the ROS layer (test/ros/*.test, test/tools/*.cpp).
   if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/cmake/ros_tests.cmake)
     include(cmake/ros_tests.cmake)
