@@ -65,8 +65,9 @@ struct BaOptions {
   double initial_lambda = 1e-4;        // LM damping (relative to the block diagonals)
   int max_retries = 8;                 // damped re-solves per sweep before giving up
   // After each accepted sweep, this many relinearized Gauss-Newton steps on every point alone
-  // (Eq. 12 with the cameras fixed; cheap, independent per point, threaded).
-  int point_iterations = 1;
+  // (Eq. 12 with the cameras fixed; cheap, independent per point, threaded). Off: in the SLAM's
+  // per-frame BA their cost bought no accuracy.
+  int point_iterations = 0;
   // Per point, after an accepted step: up to this many doublings of the step while its cost
   // keeps decreasing (the IRLS steps of Geman-McClure fall short; 0 = plain Gauss-Newton).
   int point_extrapolation = 0;

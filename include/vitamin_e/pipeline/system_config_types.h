@@ -45,7 +45,7 @@ struct SystemConfig {
   int ba_fixed_keyframes = 2;              // oldest keyframes held fixed in the keyframe BA (gauge and scale)
   int ba_keyframe_sweeps = 5;              // subspace GN sweeps when a keyframe is inserted
   int ba_frame_sweeps = 3;                 // subspace GN sweeps of the per-frame BA
-  int ba_free_keyframes = 3;               // newest keyframes optimized by the keyframe BA (with their points)
+  int ba_free_keyframes = 4;               // newest keyframes optimized by the keyframe BA (with their points)
   double keyframe_parallax_px = 20.0;      // rotation-compensated median parallax to the last keyframe
   double keyframe_min_mapped_ratio = 0.5;  // fewer mapped tracks than this ratio also asks for a keyframe
   double max_step_depth_ratio = 1.0;       // a per-frame step longer than this x scene depth is a failure
