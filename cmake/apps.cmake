@@ -9,4 +9,6 @@ foreach(app_src ${VITAMIN_E_APPS})
     target_link_libraries(${app} vitamin_e_ros)
     target_compile_definitions(${app} PRIVATE VITAMIN_E_WITH_ROS=1)
   endif()
+  # rosrun vitamin_e <name> works from install/ as from devel/.
+  install(TARGETS ${app} RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 endforeach()

@@ -50,7 +50,7 @@ endforeach()
 #  - rostest_euroc_launch_imu: sensors.bag (with /imu0): the map's z within 5 deg of the true
 #    up, the ATE within 10 % of vitamin_e_run's on the same bag
 #  - rostest_install_space: make install; a package outside the tree links libvitamin_e from
-#    install/ and runs; euroc.launch runs from install/ only
+#    install/ and runs; euroc.launch runs from install/ only; the tools are installed
 if(TARGET vitamin_e_run AND TARGET vitamin_e_evaluate)
   add_test(NAME rostest_euroc_launch_imu
     COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_euroc_launch.py
@@ -61,5 +61,16 @@ if(TARGET vitamin_e_run AND TARGET vitamin_e_evaluate)
       --data ${VE_TEST_DATA} --bag sequence.bag --out ${VE_TEST_OUT}/install_space
       --evaluate $<TARGET_FILE:vitamin_e_evaluate> --install ${CMAKE_BINARY_DIR}
       --downstream ${CMAKE_CURRENT_SOURCE_DIR}/test/downstream)
-  set_tests_properties(rostest_euroc_launch_imu rostest_install_space PROPERTIES TIMEOUT 400)
+  # imu_topic:="" as a shell leaves it (the two quotes): no IMU, the launch tracks (it crashed).
+  add_test(NAME rostest_euroc_launch_no_imu
+    COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_euroc_launch.py
+      --data ${VE_TEST_DATA} --bag sensors.bag --out ${VE_TEST_OUT}/euroc_launch_no_imu
+      --evaluate $<TARGET_FILE:vitamin_e_evaluate> --launch-arg "imu_topic:=\"\""
+      --expect-log "the first camera in ROS axes" --min-poses 50)
+  # save_map / load_map / localization_only / ns through the launch files; a damaged map ends the launch.
+  add_test(NAME rostest_launch_maps
+    COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_launch_maps.py
+      --data ${VE_TEST_DATA} --out ${VE_TEST_OUT}/launch_maps --evaluate $<TARGET_FILE:vitamin_e_evaluate>)
+  set_tests_properties(rostest_euroc_launch_imu rostest_install_space rostest_euroc_launch_no_imu rostest_launch_maps
+    PROPERTIES TIMEOUT 600)
 endif()

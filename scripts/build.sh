@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds vitamin_e in a catkin workspace at .ws/ (git-ignored; src/vitamin_e links
-# to this repository). Installs missing Debian packages first.
+# to this repository's files). Installs missing Debian packages first.
 #   ./scripts/build.sh [--sanitize] [--tests] [--target T ...]
 # --sanitize builds with ASan+UBSan in .ws_sanitize/ instead.
 set -euo pipefail
@@ -23,9 +23,23 @@ export VE_WS
 "$VE_ROOT/scripts/setup.sh"
 
 mkdir -p "$VE_WS/src"
-if [ ! -e "$VE_WS/src/vitamin_e" ]; then
-  ln -s "$VE_ROOT" "$VE_WS/src/vitamin_e"
-fi
+# The workspace's package folder holds a link to each entry of the checkout, not a link to
+# the checkout itself: the checkout holds the workspace, and rospack and rosrun (find -L)
+# would walk into it again ("File system loop detected", executables found twice, in
+# build/, devel/ and install/).
+pkg="$VE_WS/src/vitamin_e"
+[ -L "$pkg" ] && rm "$pkg"
+mkdir -p "$pkg"
+ws_real="$(cd -P "$VE_WS" && pwd)"
+for entry in "$VE_ROOT"/*; do
+  entry_real="$(cd -P "$(dirname "$entry")" && pwd)/$(basename "$entry")"
+  case "$ws_real/" in "$entry_real"/*) continue ;; esac  # the workspace (or what holds it)
+  link="$pkg/$(basename "$entry")"
+  [ -e "$link" ] || [ -L "$link" ] || ln -s "$entry" "$link"
+done
+for link in "$pkg"/*; do
+  if [ -L "$link" ] && [ ! -e "$link" ]; then rm "$link"; fi  # an entry removed from the checkout
+done
 if [ ! -e "$VE_WS/src/CMakeLists.txt" ]; then
   ln -s /usr/share/catkin/cmake/toplevel.cmake "$VE_WS/src/CMakeLists.txt"
 fi

@@ -8,6 +8,17 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 if [ ! -f "$VE_WS/devel/setup.bash" ]; then
   "$VE_ROOT/scripts/build.sh" >&2
 fi
+# roslaunch drops an argument with nothing after ':=' and silently uses its default: refuse it.
+if [ "$1" = roslaunch ]; then
+  for a in "${@:2}"; do
+    if [[ "$a" =~ ^[A-Za-z_][A-Za-z0-9_]*:=$ ]]; then
+      ve_die "roslaunch ignores '$a' (nothing after :=) and would use the default: give a value (e.g. imu_topic:=none for no IMU)"
+    fi
+  done
+fi
+# setup.bash reads the positional parameters: source it with none, run the command after.
+cmd=("$@")
+set --
 set +u
 source "$VE_WS/devel/setup.bash"
 export ROS_IP=127.0.0.1
@@ -16,4 +27,4 @@ unset ROS_IPV6
 export ROS_HOME="${ROS_HOME:-$VE_WS/ros_home}"
 export ROS_LOG_DIR="${ROS_LOG_DIR:-$VE_WS/ros_home/log}"
 mkdir -p "$ROS_LOG_DIR"
-exec "$@"
+exec "${cmd[@]}"

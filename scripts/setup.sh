@@ -14,6 +14,7 @@ PACKAGES=(
   python3-rostopic python3-rosnode python3-rosmsg python3-rosservice
   libdiagnostic-updater-dev libdiagnostic-msgs-dev python3-diagnostic-msgs
   python3-sensor-msgs python3-geometry-msgs python3-tf2-msgs python3-std-srvs
+  python3-nav-msgs python3-visualization-msgs tf2-tools tf-tools
   ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-std-srvs
   python3-numpy python3-yaml python3-matplotlib python3-opencv
   xvfb xauth x11-apps imagemagick

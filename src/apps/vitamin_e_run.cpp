@@ -32,6 +32,7 @@
 #include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/dense_input.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
+#include "vitamin_e/pipeline/session.h"
 #include "vitamin_e/pipeline/system.h"
 #ifdef VITAMIN_E_WITH_ROS
 #include "vitamin_e/ros/bag_dataset.h"
@@ -375,8 +376,10 @@ int run(const Options& o) {
                  o.stride > 1 ? (", every " + std::to_string(o.stride) + "th").c_str() : "");
     std::fprintf(stderr, "[vitamin_e_run] camera (%s): %s\n", calib.format.c_str(), calib.camera.describe().c_str());
   }
-  std::unique_ptr<pl::System> sequential;
-  if (!o.pipelined) sequential = std::make_unique<pl::System>(config, calib.camera);
+  // Sequential: a session, as the ROS tracker runs it (stamps jumping back, e.g. a bag of two
+  // recordings, start a new trajectory segment relocalized in the same map).
+  std::unique_ptr<pl::Session> sequential;
+  if (!o.pipelined) sequential = std::make_unique<pl::Session>(config, calib.camera);
   std::unique_ptr<vitamin_e::fusion::DenseMapper> dense;
   if (config.dense_enabled) {
     dense = std::make_unique<vitamin_e::fusion::DenseMapper>(config.dense,
@@ -445,7 +448,7 @@ int run(const Options& o) {
   }
   if (!o.load_map.empty()) {
     // Before the first frame: the system starts relocalizing in the loaded map.
-    pl::System& system = pipelined ? pipelined->system() : *sequential;
+    pl::System& system = pipelined ? pipelined->system() : sequential->system();
     const auto t0 = std::chrono::steady_clock::now();
     vitamin_e::map::MapFileContents contents;
     try {
@@ -493,6 +496,7 @@ int run(const Options& o) {
     cpu_tracking = cpu.tracking_ms;
     cpu_mapping = cpu.mapping_ms;
   } else {
+    unsigned dense_map = sequential->map();
     for (std::size_t i = o.start_frame; i < end && !g_stop; i += o.stride) {
       ++attempted;
       cv::Mat image;
@@ -506,12 +510,26 @@ int run(const Options& o) {
       }
       stats.timing.add("image_load", vitamin_e::elapsedMs(t_load));
       cpu_load += vitamin_e::threadCpuMs() - cpu0;
+      // A frame out of order goes on to the system, which skips it and says so in its result.
+      const pl::SessionStamp stamp = sequential->admit(dataset->timestamp(i));
+      if (stamp.time_jump) {
+        if (sequential->map() != dense_map) {  // a new map: its own world and scale
+          dense_map = sequential->map();
+          dense_input.reset();
+          if (dense) dense->reset();
+        }
+        if (!o.quiet) {
+          std::lock_guard<std::mutex> lock(result_mutex);
+          progress.warn(sequential->segmentNote() + ": trajectory segment " + std::to_string(sequential->segment()));
+        }
+      }
       // process() is mapFrame(trackFrame()): the two stages timed apart.
+      pl::System& system = sequential->system();
       cpu0 = vitamin_e::threadCpuMs();
-      pl::TrackedFrame tracked = sequential->trackFrame(image, dataset->timestamp(i), dataset->timestampText(i));
+      pl::TrackedFrame tracked = system.trackFrame(image, dataset->timestamp(i), dataset->timestampText(i));
       const double cpu1 = vitamin_e::threadCpuMs();
       cpu_tracking += cpu1 - cpu0;
-      const pl::FrameResult result = sequential->mapFrame(std::move(tracked));
+      const pl::FrameResult result = system.mapFrame(std::move(tracked));
       const double cpu2 = vitamin_e::threadCpuMs();
       cpu_mapping += cpu2 - cpu1;
       handle_result(result);
@@ -520,7 +538,7 @@ int run(const Options& o) {
   }
   // The run ends when the dense reconstruction has caught up with the SLAM.
   if (dense) dense->flush();
-  const pl::System& system = pipelined ? pipelined->system() : *sequential;
+  const pl::System& system = pipelined ? pipelined->system() : sequential->system();
   progress.finish(attempted, stats.tracked_frames);
   stats.interrupted = g_stop != 0;
   stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
@@ -540,11 +558,11 @@ int run(const Options& o) {
   // Sequential: the mesh is made on the main thread, in the result handler (with the stats' bookkeeping).
   if (!o.pipelined && dense) stats.cpu_ms["mesh"] = cpu_mesh;
   for (auto& [stage, ms] : stats.cpu_ms) ms /= static_cast<double>(std::max<std::size_t>(1, stats.frames));
-  stats.init_retries = system.initRetries();
-  stats.relocalizations = system.relocalizations();
+  stats.init_retries = sequential ? sequential->initRetries() : system.initRetries();
+  stats.relocalizations = sequential ? sequential->relocalizations() : system.relocalizations();
   // Frames seen while initializing are localized once the map exists: the
   // system's count (= trajectory poses) is the number of tracked frames.
-  stats.tracked_frames = system.framesTracked();
+  stats.tracked_frames = sequential ? sequential->framesTracked() : system.framesTracked();
   stats.first_init_frame = system.firstInitFrame();
   stats.tracked_since_init = system.framesTrackedSinceInit();
   stats.reused_map_points = system.reusedMapPoints();
@@ -552,7 +570,11 @@ int run(const Options& o) {
   std::string err;
   const std::vector<pl::MapPoint3> points = system.mapPoints();
   stats.map_points = points.size();
-  bool ok = pl::saveTrajectoryTum(system.trajectory(), traj_path, &err);
+  // One segment: the plain TUM file; more (time jumps): each after its "# segment" line.
+  const std::vector<pl::TrajectorySegment> segments =
+      sequential ? sequential->segments() : std::vector<pl::TrajectorySegment>{};
+  bool ok = segments.size() > 1 ? pl::saveSegmentsTum(segments, "T_w_c", traj_path, &err)
+                                : pl::saveTrajectoryTum(system.trajectory(), traj_path, &err);
   if (ok) ok = pl::saveMapPly(points, ply_path, &err);
   const std::string mesh_path = (fs::path(o.out) / "mesh.ply").string();
   if (ok && dense) ok = dense->saveMesh(mesh_path, &err);

@@ -355,6 +355,8 @@ void SubspaceGn::covariance(BaSummary* summary) {
   // Dense reduced camera system (6 ncf square; the per-frame BA has one free camera):
   // S = H_cc - sum_j H_cp,j H_pp,j^-1 H_pc,j, H_cp = Jc^T Wjp per slot. With use_schur, Hcc_
   // holds only the observations of fixed points, so the slots' own Jc^T w Jc are added here.
+  // Given the points (BaOptions::Covariance::kGivenPoints): H_cc alone, block diagonal.
+  const bool with_points = O_.covariance == BaOptions::Covariance::kWithPoints;
   const int n = 6 * ncf;
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(n, n);
   for (int i = 0; i < ncf; ++i) S.block<6, 6>(6 * i, 6 * i) = Hcc_[i];
@@ -365,6 +367,7 @@ void SubspaceGn::covariance(BaSummary* summary) {
     for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s) {
       const int cs = slot_cam_[s];
       if (O_.use_schur) S.block<6, 6>(6 * cs, 6 * cs).noalias() += Jc_[s].transpose() * slot_w_[s] * Jc_[s];
+      if (!with_points) continue;
       const Matrix23d Z = Wjp_[s] * Hi;
       for (int u = slot_begin_[j]; u < slot_begin_[j + 1]; ++u) {
         const Eigen::Matrix2d M = Z * Wjp_[u].transpose();

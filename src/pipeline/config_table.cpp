@@ -144,6 +144,12 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.internal(
       "compute_covariance", &b.compute_covariance,
       "the per-frame BA returns the frame's pose covariance (FrameResult::T_w_c_covariance), the keyframe BA not");
+  t.choice("covariance", &b.covariance,
+           {{"given_points", optimization::BaOptions::Covariance::kGivenPoints},
+            {"with_points", optimization::BaOptions::Covariance::kWithPoints}},
+           "what the frame's pose covariance describes: given_points, the frame's own measurements with the map as "
+           "it is (what differs between consecutive frames: the odometry's step covariance is made from it); "
+           "with_points, the pose in the map, the points' uncertainty included");
   t.key("tolerance", &b.tolerance, "converged when an accepted sweep changes the cost by less than this (relative)");
   t.key("threads", &b.threads, "threads for the loops over points (1 = serial)");
   t.key("use_schur", &b.use_schur, "eliminate the points inside each camera update (Schur complement)");

@@ -87,4 +87,9 @@ void FrontEnd::reset() {
   pending_drops_.clear();
 }
 
+void FrontEnd::restart() {
+  reset();
+  have_last_stamp_ = false;
+}
+
 }  // namespace vitamin_e::pipeline

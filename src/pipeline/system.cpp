@@ -491,6 +491,17 @@ void System::Impl::reset() {
   motion.invalidate();
 }
 
+bool System::Impl::restartTracking() {
+  const bool relocalizable = (config.relocalization.enabled && relocalizer.size() > 0) || keepRelocalizing();
+  if (map.landmarks().empty() || !relocalizable) return false;
+  front_end.restart();
+  prev_mapped_ids.clear();
+  initializer.reset();
+  motion.invalidate();
+  recovery.startRelocalizing();
+  return true;
+}
+
 System::System(const SystemConfig& config, const camera::Camera& camera) {
   if (!camera.valid()) throw std::invalid_argument("System: the camera calibration is not set");
   config.validate();
@@ -510,6 +521,8 @@ TrackedFrame System::trackFrame(const cv::Mat& image, double timestamp, const st
 FrameResult System::mapFrame(TrackedFrame&& frame) { return impl_->mapFrame(std::move(frame)); }
 
 void System::reset() { impl_->reset(); }
+
+bool System::restartTracking() { return impl_->restartTracking(); }
 
 const std::vector<TrajectoryEntry>& System::trajectory() const { return impl_->trajectory; }
 

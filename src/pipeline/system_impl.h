@@ -44,6 +44,7 @@ struct System::Impl {
   TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text);
   FrameResult mapFrame(TrackedFrame&& frame);
   void reset();
+  bool restartTracking();
 
   // The steps of mapFrame (system.cpp), one per tracking state: initialize,
   // track, relocalize; Recovery decides which.

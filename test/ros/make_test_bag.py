@@ -15,7 +15,8 @@ ROS-interface tests need: /imu0 synthesized by make_bag.sh --imu,
 /cam0/image_raw/compressed (jpeg), /cam0/camera_info and /cam0/image_rect. The
 generator's body is its camera; here the sequence gets EuRoC's body instead (its
 cam0 T_BS, x up), written as the body ground truth and the calibration's T_BS, so
-the camera -> IMU rotation is exercised as on EuRoC.
+the camera -> IMU rotation is exercised as on EuRoC. OUT_DIR/calibration_camera_body.yaml
+is the generator's own calibration (T_BS identity): a wrong one for sensors.bag's IMU.
 
 --long-frames N: also OUT_DIR/long.bag and long_calibration.yaml, a sequence of N
 frames (the mesh stream's test: the camera goes on around the room).
@@ -182,6 +183,8 @@ def generate(out_dir, frames, generator, make_bag):
     gt = glob.glob(os.path.join(seq, "groundtruth*tum*"))
     if not sensor or not gt:
         sys.exit("make_test_bag.py: generator output lacks cam0/sensor.yaml or a groundtruth .tum")
+    # The generator's own calibration (body = camera): the wrong T_BS for sensors.bag's IMU.
+    shutil.copy(sensor[0], os.path.join(out_dir, "calibration_camera_body.yaml"))
     use_euroc_body(seq)
     subprocess.check_call([make_bag, seq, os.path.join(out_dir, "sensors.bag"), "--imu", "--compressed", "jpeg",
                            "--camera-info", "--rectified"])

@@ -60,16 +60,25 @@ class Watcher {
   std::vector<typename Msg::ConstPtr> messages_;
 };
 
-// Waits for an ERROR (or FATAL) on /rosout whose text contains `needle`.
-inline bool waitForLogError(Watcher<rosgraph_msgs::Log>& rosout, const std::string& needle, double timeout_s) {
+// Waits for a message of at least `level` on /rosout whose text contains every needle.
+inline bool waitForLog(Watcher<rosgraph_msgs::Log>& rosout, std::uint8_t level, const std::vector<std::string>& needles,
+                       double timeout_s) {
   return rosout.waitFor(
       [&](const std::vector<rosgraph_msgs::Log::ConstPtr>& logs) {
         for (const auto& log : logs) {
-          if (log->level >= rosgraph_msgs::Log::ERROR && log->msg.find(needle) != std::string::npos) return true;
+          if (log->level < level) continue;
+          bool all = true;
+          for (const auto& n : needles) all = all && log->msg.find(n) != std::string::npos;
+          if (all) return true;
         }
         return false;
       },
       timeout_s);
+}
+
+// Waits for an ERROR (or FATAL) on /rosout whose text contains `needle`.
+inline bool waitForLogError(Watcher<rosgraph_msgs::Log>& rosout, const std::string& needle, double timeout_s) {
+  return waitForLog(rosout, rosgraph_msgs::Log::ERROR, {needle}, timeout_s);
 }
 
 }  // namespace vitamin_e_test

@@ -8,6 +8,8 @@ free port) and checks the trajectory it writes.
                                      install/ only (test/downstream) and run it
         [--max-tilt-deg D]           the map's z within D degrees of the true up
         [--compare-offline RUN_PATH] the ATE within 10 % of vitamin_e_run's on the same bag
+        [--launch-arg NAME:=VALUE ...] more arguments of euroc.launch
+        [--expect-log TEXT ...]      the launch's output must contain TEXT
         [--min-poses N] [--timeout S]
 
 The map's tilt: vitamin_e_evaluate aligns the saved trajectory (T_map_c) to the ground
@@ -112,6 +114,8 @@ def main():
     ap.add_argument("--downstream", default="")
     ap.add_argument("--max-tilt-deg", type=float, default=-1.0)
     ap.add_argument("--compare-offline", default="", help="vitamin_e_run, run with config/euroc.yaml as the launch")
+    ap.add_argument("--launch-arg", action="append", default=[])
+    ap.add_argument("--expect-log", action="append", default=[])
     ap.add_argument("--min-poses", type=int, default=30)
     ap.add_argument("--timeout", type=float, default=240.0)
     args = ap.parse_args()
@@ -149,7 +153,7 @@ def main():
         build_downstream(args.downstream, os.path.join(args.out, "downstream"), setup, env)
     launch = ["roslaunch", "-p", str(port), "vitamin_e", "euroc.launch", "bag:=" + bag, "rviz:=false",
               "calibration_file:=" + calib, "trajectory_file:=" + traj,
-              "mesh_file:=" + os.path.join(args.out, "mesh.ply")]
+              "mesh_file:=" + os.path.join(args.out, "mesh.ply")] + args.launch_arg
     if setup:
         cmd = ["bash", "-c", 'source "$0" && exec "$@"', setup] + launch
     else:
@@ -177,6 +181,19 @@ def main():
     poses = len(read_tum(traj))
     result = {"launch_s": round(seconds, 1), "poses": poses, "install": bool(args.install)}
     failures = []
+    log_text = open(log_path, errors="replace").read()
+    for text in args.expect_log:
+        if text not in log_text:
+            failures.append("the launch's output lacks '%s' (log %s)" % (text, log_path))
+    if args.install:
+        # The command-line tools come with the install space too (rosrun vitamin_e ...).
+        prefix = os.path.dirname(setup)
+        for tool in ("vitamin_e_run", "vitamin_e_make_sequence", "vitamin_e_evaluate", "vitamin_e_ros_params"):
+            path = os.path.join(prefix, "lib", "vitamin_e", tool)
+            if not os.access(path, os.X_OK):
+                failures.append("%s not installed by make install" % path)
+            elif subprocess.call([path, "--help"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) != 0:
+                failures.append("%s --help failed" % path)
     if poses < args.min_poses:
         failures.append("%d poses saved, expected >= %d" % (poses, args.min_poses))
     ev = evaluate(args.evaluate, traj, gt, os.path.join(args.out, "aligned.txt"))

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/static_transform_broadcaster.h>
@@ -113,4 +114,39 @@ TEST(Rep105, DynamicReconfigure) {
   for (const auto& b : reconfigure.response.config.bools) points_set |= b.name == "publish_points" && !b.value;
   EXPECT_TRUE(period_set);
   EXPECT_TRUE(points_set);
+}
+
+// The camera -> IMU rotation checked against the gyroscope (imu_check.test): the tracker with
+// the bag's own calibration says they agree; the one with a camera's calibration of another
+// rig (T_BS identity, EuRoC's IMU is turned by about 90 degrees) warns that it looks wrong.
+TEST(ImuCheck, WrongCameraToImuRotationWarned) {
+  ros::NodeHandle nh;
+  const std::size_t frames = std::stoul(vitamin_e_test::privateParam("frames", "60"));
+  Watcher<vitamin_e::TrackingStatus> right(nh, "/tracking/status", 1000);
+  Watcher<vitamin_e::TrackingStatus> wrong(nh, "/tracking_wrong_tbs/status", 1000);
+  Watcher<rosgraph_msgs::Log> rosout(nh, "/rosout", 5000);
+  ASSERT_TRUE(right.waitForPublisher(30.0));
+  ASSERT_TRUE(wrong.waitForPublisher(30.0));
+  ASSERT_TRUE(rosout.waitForPublisher(30.0));
+  ASSERT_TRUE(ros::service::waitForService("/player/pause_playback", ros::Duration(30.0)));
+  std_srvs::SetBool resume;
+  resume.request.data = false;
+  ASSERT_TRUE(ros::service::call("/player/pause_playback", resume));
+  auto processed = [](const std::vector<vitamin_e::TrackingStatus::ConstPtr>& s) {
+    return s.empty() ? std::size_t{0} : static_cast<std::size_t>(s.back()->frames_processed);
+  };
+  for (auto* w : {&right, &wrong}) {
+    EXPECT_TRUE(w->waitFor([&](const auto& s) { return processed(s) + 1 >= frames; }, 200.0))
+        << "processed " << processed(w->messages()) << " of " << frames;
+  }
+  using Log = rosgraph_msgs::Log;
+  EXPECT_TRUE(vitamin_e_test::waitForLog(rosout, Log::WARN, {"looks wrong", "calibration_camera_body.yaml"}, 10.0))
+      << "no warning for the wrong camera -> IMU rotation";
+  EXPECT_TRUE(vitamin_e_test::waitForLog(rosout, Log::INFO, {"agrees with the gyroscope", "/calibration.yaml"}, 10.0))
+      << "the right calibration was not found to agree";
+  for (const auto& l : rosout.messages()) {
+    EXPECT_FALSE(l->msg.find("looks wrong") != std::string::npos &&
+                 l->msg.find("/calibration.yaml") != std::string::npos)
+        << "the right calibration was warned about: " << l->msg;
+  }
 }

@@ -3,7 +3,6 @@
 //       camera_info) into four tracking nodelets: raw + camera_info (the reference),
 //       ~image_transport compressed, image_rect (rectified camera_info), and raw with a tenth
 //       of the tracked points (config few_points.yaml)
-//   Loop.*       (loop.test) the test bag played with rosbag play --loop --clock
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -20,7 +19,7 @@
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/eval/metrics.h"
-#include "vitamin_e/ros/trajectory_segments.h"
+#include "vitamin_e/pipeline/session.h"
 
 using vitamin_e_test::Watcher;
 using Statuses = std::vector<vitamin_e::TrackingStatus::ConstPtr>;
@@ -37,14 +36,14 @@ void setPaused(bool paused) {
   ASSERT_TRUE(ros::service::call("/player/pause_playback", pause));
 }
 
-eval::Trajectory toEval(const vitamin_e_ros::TrajectorySegment& s) {
+eval::Trajectory toEval(const vitamin_e::pipeline::TrajectorySegment& s) {
   eval::Trajectory t;
   for (const auto& e : s.poses) t.push_back({e.timestamp, e.T_w_c});
   return t;
 }
 
 // ATE RMSE of a saved trajectory's segment against the test sequence's ground truth.
-double segmentAte(const vitamin_e_ros::TrajectorySegment& segment) {
+double segmentAte(const vitamin_e::pipeline::TrajectorySegment& segment) {
   const eval::Trajectory truth = eval::readTum(vitamin_e_test::privateParam("data_dir") + "/groundtruth.tum");
   eval::EvalConfig config;
   config.frames = truth.size();
@@ -53,12 +52,12 @@ double segmentAte(const vitamin_e_ros::TrajectorySegment& segment) {
 }
 
 // Saves a tracker's trajectory through its service; returns its segments.
-std::vector<vitamin_e_ros::TrajectorySegment> saveTrajectory(const std::string& tracker) {
+std::vector<vitamin_e::pipeline::TrajectorySegment> saveTrajectory(const std::string& tracker) {
   vitamin_e::SaveFile save;
   save.request.path = vitamin_e_test::privateParam("output_dir", "/tmp") + "/" + tracker + "_trajectory.txt";
   EXPECT_TRUE(ros::service::call("/" + tracker + "/save_trajectory", save)) << tracker;
   EXPECT_TRUE(save.response.success) << save.response.message;
-  return vitamin_e_ros::readSegmentsTum(save.request.path);
+  return vitamin_e::pipeline::readSegmentsTum(save.request.path);
 }
 
 // The subscriptions of Interfaces.*: made before the bag plays, read by the later tests.
@@ -209,39 +208,4 @@ TEST(Interfaces, DiagnosticsAndCovariance) {
   ASSERT_FALSE(s_few.empty());
   EXPECT_LT(s_few.back()->num_tracked * 5, s_many.back()->num_tracked) << "the few-points tracker is not sparse";
   g_run.reset();
-}
-
-// A bag played with --loop: the stamps jump back at the second pass, the SLAM
-// restarts, and the saved trajectory has both passes as two segments, each close to the
-// ground truth. The path is cleared at the jump.
-TEST(Loop, SecondPassTracked) {
-  ros::NodeHandle nh;
-  const std::size_t frames = std::stoul(vitamin_e_test::privateParam("frames", "60"));
-  Watcher<vitamin_e::TrackingStatus> status(nh, "/tracking/status", 5000);
-  Watcher<nav_msgs::Path> path(nh, "/tracking/path", 5000);
-  ASSERT_TRUE(status.waitForPublisher(30.0));
-  ASSERT_TRUE(path.waitForPublisher(30.0));
-  setPaused(false);
-  // Most of the second pass processed (frames queue in the tracker: every frame is processed).
-  EXPECT_TRUE(status.waitFor(
-      [&](const Statuses& s) { return !s.empty() && s.back()->segment >= 2 && processed(s) >= 2 * frames - 5; }, 150.0))
-      << "frames processed " << processed(status.messages());
-  setPaused(true);
-  const auto segments = saveTrajectory("tracking");
-  ASSERT_GE(segments.size(), 2u);
-  EXPECT_NE(segments[1].note.find("time jump"), std::string::npos) << segments[1].note;
-  for (std::size_t k = 0; k < 2; ++k) {
-    EXPECT_GT(segments[k].poses.size(), frames / 2) << "segment " << k + 1;
-    const double ate = segmentAte(segments[k]);
-    RecordProperty("ate_pass" + std::to_string(k + 1) + "_m", std::to_string(ate));
-    EXPECT_LT(ate, 0.05) << "segment " << k + 1;
-  }
-  // The path: poses in the first pass, then an empty path when the second begins.
-  const auto paths = path.messages();
-  bool grown = false, cleared = false;
-  for (const auto& p : paths) {
-    if (p->poses.size() > 10) grown = true;
-    if (grown && p->poses.empty()) cleared = true;
-  }
-  EXPECT_TRUE(cleared) << "the path was not cleared at the time jump (" << paths.size() << " path messages)";
 }

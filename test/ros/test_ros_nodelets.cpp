@@ -6,6 +6,8 @@
 //                also while its SLAM thread holds a frame and its queue is full
 //   Threads.*    (threads.test, test_ros_threads.cpp) services and reconfigure beside a slow SLAM thread
 //   MapFile.*    (map_file.test, test_ros_map_file.cpp) ~save_map / ~load_map / ~localization_only
+//   TimeJump.*, Loop.* (time_jump.test, loop.test; test_ros_time_jump.cpp) one map across time jumps
+//   ImuCheck.*   (imu_check.test, test_ros_frames.cpp) the camera -> IMU rotation against the gyroscope
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -295,7 +297,7 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
 
   // The errors are throttled per call site (2 s) and the previous test logged
   // them too: the bad frame is sent again until its error is logged.
-  auto publishUntilLogged = [&](const sensor_msgs::Image& img, const std::string& error) {
+  auto publish_until_logged = [&](const sensor_msgs::Image& img, const std::string& error) {
     const auto deadline = ros::WallTime::now() + ros::WallDuration(10.0);
     do {
       image_pub_.publish(img);
@@ -303,9 +305,10 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
     } while (ros::WallTime::now() < deadline);
     return false;
   };
-  EXPECT_TRUE(publishUntilLogged(image(23.0, "bayer_rggb8", 160, 120, 1), "unsupported image encoding 'bayer_rggb8'"));
+  EXPECT_TRUE(
+      publish_until_logged(image(23.0, "bayer_rggb8", 160, 120, 1), "unsupported image encoding 'bayer_rggb8'"));
   // The same stamp as the mono16 frame.
-  EXPECT_TRUE(publishUntilLogged(image(22.0, "mono8", 160, 120, 1), "does not increase"));
+  EXPECT_TRUE(publish_until_logged(image(22.0, "mono8", 160, 120, 1), "does not increase"));
 
   image_pub_.publish(image(1.8e9, "mono8", 160, 120, 1));  // wall-clock-sized stamp
   EXPECT_TRUE(processed(n0 + 3)) << "a frame with a wall-clock stamp after bag stamps was not processed";
@@ -325,7 +328,7 @@ TEST_F(BadInput, ResetAndTimeJumpsStartNewSegments) {
   while (image_pub_.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.02).sleep();
   ASSERT_GT(image_pub_.getNumSubscribers(), 0u);
   // The status of the frame stamped t (each frame's status carries its image's stamp).
-  auto statusOf = [&](double t) -> vitamin_e::TrackingStatus::ConstPtr {
+  auto status_of = [&](double t) -> vitamin_e::TrackingStatus::ConstPtr {
     vitamin_e::TrackingStatus::ConstPtr found;
     status.waitFor(
         [&](const Statuses& s) {
@@ -344,25 +347,62 @@ TEST_F(BadInput, ResetAndTimeJumpsStartNewSegments) {
   }
   ASSERT_TRUE(first);
   image_pub_.publish(image(t0 + 10.0, "mono8", 160, 120, 1));
-  const auto before = statusOf(t0 + 10.0);
+  const auto before = status_of(t0 + 10.0);
   ASSERT_TRUE(before);
 
   std_srvs::Trigger reset;
   ASSERT_TRUE(ros::service::call("/tracking/reset", reset));
   EXPECT_TRUE(reset.response.success) << reset.response.message;
   image_pub_.publish(image(t0 + 9.5, "mono8", 160, 120, 1));  // 0.5 s before the last frame
-  const auto after_reset = statusOf(t0 + 9.5);
+  const auto after_reset = status_of(t0 + 9.5);
   ASSERT_TRUE(after_reset) << "after ~reset, a frame older than the last was not processed";
   EXPECT_EQ(after_reset->segment, before->segment + 1);
   EXPECT_EQ(after_reset->frames_processed, before->frames_processed + 1) << "counts go on over segments";
 
   image_pub_.publish(image(t0 + 9.2, "mono8", 160, 120, 1));  // 0.3 s back: dropped
   image_pub_.publish(image(t0 + 2.0, "mono8", 160, 120, 1));  // 7.5 s back: a new SLAM run
-  const auto after_jump = statusOf(t0 + 2.0);
+  const auto after_jump = status_of(t0 + 2.0);
   ASSERT_TRUE(after_jump) << "a frame after a jump back in time was not processed";
   EXPECT_EQ(after_jump->segment, before->segment + 2);
   EXPECT_EQ(after_jump->frames_processed, after_reset->frames_processed + 1) << "the 0.3 s step back was processed";
   for (const auto& m : status.messages()) EXPECT_GT(std::abs(m->header.stamp.toSec() - (t0 + 9.2)), 1e-3);
+}
+
+// A camera_info that changes after the calibration was taken (a driver reloading its
+// calibration file): the tracker keeps the first and says so, once.
+TEST_F(BadInput, CameraInfoChangeWarnedOnce) {
+  Watcher<vitamin_e::TrackingStatus> status(nh_, "/tracking/status", 1000);
+  Watcher<rosgraph_msgs::Log> rosout(nh_, "/rosout", 1000);
+  ASSERT_TRUE(status.waitForPublisher(30.0));
+  ASSERT_TRUE(rosout.waitForPublisher(30.0));
+  const auto deadline = ros::WallTime::now() + ros::WallDuration(30.0);
+  while (image_pub_.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.02).sleep();
+  ASSERT_GT(image_pub_.getNumSubscribers(), 0u);
+  bool first = false;
+  for (int attempt = 0; attempt < 50 && !first; ++attempt) {
+    image_pub_.publish(image(2.0e9 + 0.001 * attempt, "mono8", 160, 120, 1));
+    first = status.waitFor([](const Statuses& s) { return !s.empty(); }, 0.2);
+  }
+  ASSERT_TRUE(first) << "the tracker never processed a valid frame";
+  sensor_msgs::CameraInfo info;
+  info.width = 160;
+  info.height = 120;
+  info.distortion_model = "plumb_bob";
+  info.D = {0.0, 0.0, 0.0, 0.0, 0.0};
+  info.K = {165.0, 0.0, 79.5, 0.0, 165.0, 59.5, 0.0, 0.0, 1.0};  // fx, fy + 10 %
+  info_pub_.publish(info);
+  EXPECT_TRUE(vitamin_e_test::waitForLog(rosout, rosgraph_msgs::Log::WARN, {"camera_info changed"}, 10.0))
+      << "a changed camera_info was ignored silently";
+  // Once: the same change again is not said again.
+  const auto count = [&] {
+    int n = 0;
+    for (const auto& l : rosout.messages()) n += l->msg.find("camera_info changed") != std::string::npos ? 1 : 0;
+    return n;
+  };
+  info_pub_.publish(info);
+  image_pub_.publish(image(2.1e9, "mono8", 160, 120, 1));
+  EXPECT_TRUE(status.waitFor([](const Statuses& s) { return s.back()->header.stamp.toSec() > 2.05e9; }, 10.0));
+  EXPECT_EQ(count(), 1);
 }
 
 // (d) ~trajectory_file and ~map_file (the PLY export, now also

@@ -65,7 +65,7 @@ const std::map<std::string, std::string> kNumberOption = {
     {"bench_fusion_dense", "--step"},         {"bench_meshing_delaunay", "--points"},
     {"bench_optimization_ba", "--threads"},   {"bench_optimization_covariance", "--points"},
     {"bench_system_soak", "--minutes"},       {"bench_system_map_file", "--points"},
-    {"bench_tracking_render", "--per-frame"},
+    {"bench_tracking_render", "--per-frame"}, {"bench_system_step_covariance", "--frames"},
 };
 
 }  // namespace

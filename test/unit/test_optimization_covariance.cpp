@@ -48,8 +48,9 @@ void fixUnconstrainedPoints(BaProblem* p) {
 // Dense reference: J of every residual w.r.t. every free variable by central differences
 // (cameras: T * expSE3(delta), points: p + d), H = J^T W J with the Geman-McClure IRLS weights
 // at the solution, cov = c (H^-1) camera blocks, c = sum |r|^2 / (2 m_in - n) over the m_in
-// observations with |r| < 3 robust sigma.
-std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigma) {
+// observations with |r| < 3 robust sigma. given_points: c (H_cc,i)^-1 of each camera's own
+// block instead (the points held where they are).
+std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigma, bool given_points = false) {
   std::vector<int> cam_col(p.cameras.size(), -1), pt_col(p.points.size(), -1);
   int n = 0;
   for (size_t c = 0; c < p.cameras.size(); ++c)
@@ -110,15 +111,22 @@ std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigm
   const Eigen::MatrixXd H_inv = H.ldlt().solve(Eigen::MatrixXd::Identity(n, n));
   const double sigma2 = sum_s / (2 * m_in - n);
   std::vector<Matrix6d> cov(p.cameras.size(), Matrix6d::Zero());
-  for (size_t c = 0; c < p.cameras.size(); ++c)
-    if (cam_col[c] >= 0) cov[c] = sigma2 * H_inv.block<6, 6>(cam_col[c], cam_col[c]);
+  for (size_t c = 0; c < p.cameras.size(); ++c) {
+    if (cam_col[c] < 0) continue;
+    const Matrix6d H_cc = H.block<6, 6>(cam_col[c], cam_col[c]);
+    cov[c] = sigma2 * (given_points ? Matrix6d(H_cc.inverse()) : Matrix6d(H_inv.block<6, 6>(cam_col[c], cam_col[c])));
+  }
   return cov;
 }
 
 }  // namespace
 
 TEST(BaCovariance, MatchesADenseNumericalReference) {
-  for (bool schur : {true, false}) {
+  using Covariance = BaOptions::Covariance;
+  for (const auto [schur, of] :
+       {std::pair{true, Covariance::kWithPoints}, std::pair{false, Covariance::kWithPoints},
+        std::pair{true, Covariance::kGivenPoints}, std::pair{false, Covariance::kGivenPoints}}) {
+    const bool given = of == Covariance::kGivenPoints;
     SyntheticBa s = smallScene(5, 80, 4);
     BaProblem p = s.truth;
     p.cameras[0].fixed = p.cameras[1].fixed = true;
@@ -131,9 +139,10 @@ TEST(BaCovariance, MatchesADenseNumericalReference) {
     opt.max_sweeps = 100;
     opt.tolerance = 1e-14;
     opt.compute_covariance = true;
+    opt.covariance = of;
     const BaSummary sum = solveSubspaceGaussNewton(p, opt);
     ASSERT_EQ(sum.camera_covariance.size(), p.cameras.size());
-    const auto ref = referenceCovariance(p, opt.robust_sigma_px);
+    const auto ref = referenceCovariance(p, opt.robust_sigma_px, given);
     EXPECT_GT(sum.residual_variance, 0.25) << "0.7 px noise per coordinate: 0.49 px^2";
     EXPECT_LT(sum.residual_variance, 0.75);
     for (size_t c = 0; c < p.cameras.size(); ++c) {
@@ -142,12 +151,13 @@ TEST(BaCovariance, MatchesADenseNumericalReference) {
         EXPECT_EQ(sum.camera_covariance[c].norm(), 0.0);
         continue;
       }
-      ASSERT_TRUE(sum.camera_covariance_valid[c]) << "camera " << c << (schur ? " (Schur)" : " (plain)");
+      const char* what =
+          given ? (schur ? " (given points, Schur)" : " (given points, plain)") : (schur ? " (Schur)" : " (plain)");
+      ASSERT_TRUE(sum.camera_covariance_valid[c]) << "camera " << c << what;
       const Matrix6d& C = sum.camera_covariance[c];
-      EXPECT_LT((C - ref[c]).norm(), 1e-4 * ref[c].norm())
-          << "camera " << c << (schur ? " (Schur)" : " (plain)") << "\nsolver:\n"
-          << C << "\nreference:\n"
-          << ref[c];
+      EXPECT_LT((C - ref[c]).norm(), 1e-4 * ref[c].norm()) << "camera " << c << what << "\nsolver:\n"
+                                                           << C << "\nreference:\n"
+                                                           << ref[c];
       EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix6d>(C).eigenvalues().minCoeff(), 0.0);
     }
   }
@@ -182,6 +192,7 @@ TEST(BaCovariance, PredictsTheSpreadOfTheSolutionOverNoise) {
       opt.max_sweeps = 30;
       opt.tolerance = 1e-12;
       opt.compute_covariance = true;
+      opt.covariance = BaOptions::Covariance::kWithPoints;  // the pose's spread, the points' error included
       const BaSummary sum = solveSubspaceGaussNewton(p, opt);
       ASSERT_TRUE(sum.camera_covariance_valid[free_cam]);
       const Matrix6d& C = sum.camera_covariance[free_cam];
@@ -218,6 +229,7 @@ TEST(BaCovariance, OffByDefaultAndInvalidWithoutAGauge) {
   EXPECT_EQ(with.final_cost, off.final_cost);
   for (size_t c = 0; c < p.cameras.size(); ++c) EXPECT_TRUE(p.cameras[c].T_w_c.isApprox(q.cameras[c].T_w_c, 0.0));
   // No fixed camera: the 7-DoF gauge leaves S singular, so no covariance is claimed.
+  on.covariance = BaOptions::Covariance::kWithPoints;
   BaProblem g = s.truth;
   addNoise(&g, 0.5, 4);
   const BaSummary gauge = solveSubspaceGaussNewton(g, on);

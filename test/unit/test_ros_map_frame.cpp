@@ -1,5 +1,5 @@
-// The ROS layer's map frame, gravity window, covariance re-expression, trajectory segments
-// and diagnostics levels, without a ROS master.
+// The ROS layer's map frame, gravity window, covariance re-expression and
+// diagnostics levels, without a ROS master.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +12,6 @@
 #include "vitamin_e/geometry/lie.h"
 #include "vitamin_e/ros/map_frame.h"
 #include "vitamin_e/ros/tracking_health.h"
-#include "vitamin_e/ros/trajectory_segments.h"
 
 using namespace vitamin_e_ros;
 namespace geo = vitamin_e::geometry;
@@ -145,32 +144,6 @@ TEST(RosMapFrame, CovarianceInTheParentFrameAndAtTheBase) {
   const Matrix6d at_base = covarianceMovedTo(in_parent, T_p_c.linear() * T_c_b.translation());
   EXPECT_LT((emp_cam - in_parent).norm(), 0.05 * in_parent.norm()) << emp_cam << "\n\n" << in_parent;
   EXPECT_LT((emp_base - at_base).norm(), 0.05 * at_base.norm()) << emp_base << "\n\n" << at_base;
-}
-
-TEST(RosTrajectorySegments, WrittenAndReadBack) {
-  std::vector<TrajectorySegment> segments(2);
-  segments[0].note = "start";
-  segments[1].note = "time jump: stamp jumped back by 2.950 s";
-  for (int k = 0; k < 3; ++k) {
-    vitamin_e::pipeline::TrajectoryEntry e;
-    e.timestamp = 1000.0 + 0.05 * k;
-    e.T_w_c = pose(Eigen::Vector3d(0.01 * k, 0, 0), Eigen::Vector3d(k, 0, 0));
-    segments[0].poses.push_back(e);
-    e.T_w_c.translation().y() = 5.0;
-    segments[1].poses.push_back(e);
-  }
-  const std::string path = ::testing::TempDir() + "/segments.txt";
-  std::string error;
-  ASSERT_TRUE(saveSegmentsTum(segments, "T_map_c", path, &error)) << error;
-  const auto back = readSegmentsTum(path);
-  ASSERT_EQ(back.size(), 2u);
-  EXPECT_EQ(back[1].note, segments[1].note);
-  ASSERT_EQ(back[1].poses.size(), 3u);
-  EXPECT_NEAR(back[1].poses[2].timestamp, 1000.1, 1e-9);
-  EXPECT_TRUE(back[1].poses[2].T_w_c.isApprox(segments[1].poses[2].T_w_c, 1e-8));
-  EXPECT_FALSE(saveSegmentsTum(segments, "T_map_c", "/nonexistent/dir/x.txt", &error));
-  EXPECT_NE(error.find("/nonexistent/dir/x.txt"), std::string::npos);
-  std::remove(path.c_str());
 }
 
 TEST(RosTrackingHealth, Levels) {

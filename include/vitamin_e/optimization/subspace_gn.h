@@ -85,6 +85,15 @@ struct BaOptions {
   // solve is the same either way; this adds the reduced system's assembly and a dense 6 n_c
   // inverse (about 0.2 ms for 3,000 points and one free camera, see covariance_ms).
   bool compute_covariance = false;
+  // What that covariance describes.
+  //   kWithPoints: the camera relative to the fixed cameras, the points' own uncertainty
+  //     included (S above): the error of the camera's pose in the map.
+  //   kGivenPoints: the camera's own measurements alone, the points taken as they are
+  //     (H_cc, no elimination): the error that differs between cameras seeing the same
+  //     points, of which the error of the motion between consecutive frames is made
+  //     (their common map error cancels in it).
+  enum class Covariance { kWithPoints, kGivenPoints };
+  Covariance covariance = Covariance::kGivenPoints;
   void validate() const;  // throws std::invalid_argument naming the key
 };
 
@@ -102,8 +111,8 @@ struct BaSummary {
   double final_lambda = 0.0;
   // With BaOptions::compute_covariance, per camera of the problem (same index; empty otherwise):
   // the covariance of the camera's right perturbation delta = (rho, phi) at the solution
-  // (T_w_c * expSE3(delta), delta in the camera frame; problem units^2 and rad^2), relative to
-  // the fixed cameras (the gauge). Zero and not valid for fixed cameras, and for every camera
+  // (T_w_c * expSE3(delta), delta in the camera frame; problem units^2 and rad^2), as
+  // BaOptions::covariance says (relative to the fixed cameras, or given the points). Zero and not valid for fixed cameras, and for every camera
   // when S is not positive definite (no fixed camera, too few observations), when the inliers
   // leave no degree of freedom, or when there are more than 100 free cameras.
   std::vector<Eigen::Matrix<double, 6, 6>> camera_covariance;

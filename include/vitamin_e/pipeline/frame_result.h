@@ -115,9 +115,11 @@ struct FrameResult {
   StateReason reason = StateReason::kWaitingForMap;         // why it is in that state
   bool pose_valid = false;                                  // T_w_c is meaningful (state == kTracking)
   Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();  // camera (optical) in world
-  // Covariance of T_w_c from the per-frame BA (optimization::BaSummary::camera_covariance): of
-  // the right perturbation delta = (rho, phi), T_w_c * expSE3(delta), in the camera frame, map
-  // units^2 and rad^2, relative to the fixed keyframes. Meaningful only when the flag is set.
+  // Covariance of T_w_c from the per-frame BA (optimization::BaSummary::camera_covariance, as
+  // ba.covariance says: by default the frame's own measurements, the map held as it is): of the
+  // right perturbation delta = (rho, phi), T_w_c * expSE3(delta), in the camera frame, map
+  // units^2 and rad^2. Meaningful only when the flag is set. The odometry's step covariance is
+  // made from it (step_covariance.h).
   Eigen::Matrix<double, 6, 6> T_w_c_covariance = Eigen::Matrix<double, 6, 6>::Zero();
   bool T_w_c_covariance_valid = false;
   std::vector<FramePoint> points;           // tracked points of this frame

@@ -31,6 +31,9 @@ class FrontEnd {
   void dropTracks(const std::vector<std::uint64_t>& ids);
   // Forgets every track and pending drop; the stamp order is kept.
   void reset();
+  // reset(), and the stamp order starts over: the next frame may be older than the
+  // last (the stream restarted: a bag replayed, a clock reset).
+  void restart();
   // Frames and tracks continue the numbering of a map loaded from a file: the
   // next frame's index is at least next_frame_index (frame indices of this
   // stream are offset by the difference, see frameIndexOffset()) and new track

@@ -53,6 +53,15 @@ class System {
 
   // Forgets map and tracks; the trajectory so far is kept.
   void reset();
+  // The image stream starts over (its stamps went back: a bag replayed or
+  // restarted, a clock reset): the tracks end, the stamp order starts again,
+  // and the camera is looked for in the existing map by relocalization, as
+  // after a loss, so that its poses go on in the same world frame and scale
+  // (a new map only if it is not found within relocalization.max_frames, as
+  // after any loss). Returns false, and changes nothing, when there is no map
+  // to relocalize in (none yet, or relocalization disabled): start over with
+  // reset() or a new System then.
+  bool restartTracking();
 
   // Map persistence (the file: map/map_file.h; src/pipeline/system_map_io.cpp).
   // exportMap: the map, the relocalizer's index, the camera and the scale as

@@ -91,7 +91,7 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   in.message = stats_.message;
   in.input_hz = input_hz;
   in.processed_hz = processed_hz;
-  in.queue_all = process_all_frames_;
+  in.queue_all = params_.process_all_frames;
   in.queued = queue.waiting;
   in.queue_capacity = queue.capacity;
   const Health health = trackingHealth(in);
@@ -107,7 +107,8 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("frames rejected (bad input)", stats_.rejected);
   status.add("frames queued", queue.waiting);
   status.add("queue capacity", queue.capacity);
-  status.add("queue mode", process_all_frames_ ? "every frame (the callback waits when full)" : "newest frame only");
+  status.add("queue mode",
+             params_.process_all_frames ? "every frame (the callback waits when full)" : "newest frame only");
   status.add("SLAM thread busy", queue.busy ? "yes" : "no");
   status.add("frames dropped by the queue", queue.dropped);
   status.addf("queue wait mean [s]", "%.3f", wait_mean);
@@ -117,6 +118,7 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("map size", stats_.map_size);
   status.add("re-initializations", stats_.init_retries);
   status.add("segment", stats_.segment);
+  status.add("map", stats_.map);
   status.add("transport", transport_);
   if (!stats_.message.empty()) status.add("message", stats_.message);
 }

@@ -1,5 +1,6 @@
-// TrackingNodelet: the map frame of a SLAM run (see vitamin_e/ros/map_frame.h), fixed at its
-// first pose. The core's world is the first reference camera, so T_w_c0 = identity below.
+// TrackingNodelet: the map frame of each map of the session (see vitamin_e/ros/map_frame.h),
+// fixed at its first pose, and the check of the camera -> IMU rotation against the gyroscope.
+// The core's world is the first reference camera, so T_w_c0 = identity below.
 #include <cstdio>
 
 #include <geometry_msgs/TransformStamped.h>
@@ -12,70 +13,63 @@ namespace vitamin_e_ros {
 void TrackingNodelet::alignMap(const vitamin_e::pipeline::FrameResult& result) {
   const Eigen::Isometry3d T_w_c0 = Eigen::Isometry3d::Identity();
   have_map_ = true;
-  if (optical_map_) {
+  const unsigned map = session_->map();
+  if (params_.opticalMap()) {
     T_map_w_ = Eigen::Isometry3d::Identity();
     map_description_ = "map = the first camera's optical frame";
     return;
   }
   std::string why_not;
-  if (!imu_topic_.empty()) {
+  if (!params_.imu_topic.empty()) {
     Eigen::Matrix3d R_c_imu;
-    if (imuToCamera(&R_c_imu, &why_not)) {
-      GravityWindow::Estimate e;
-      std::size_t received = 0;
-      {
-        const auto& trajectory = system_->trajectory();
-        std::lock_guard<std::mutex> lock(imu_mutex_);
-        received = imu_samples_;
-        e = gravity_.upInWorld(
-            result.timestamp, gravity_window_s_, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
-      }
+    std::string source;
+    if (imuToCamera(&R_c_imu, &source, &why_not)) {
+      const auto& trajectory = session_->system().trajectory();
+      const GravityWindow::Estimate e = imu_.upInWorld(
+          result.timestamp, params_.gravity_window_s, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
       if (e.ok) {
         T_map_w_ = mapFromUp(e.up_w, T_w_c0);
         char text[256];
         std::snprintf(text, sizeof(text),
                       "map z up from gravity (%s: %d samples over %.2f s before the initialization, |f| %.2f m/s^2), "
                       "x the first camera's heading",
-                      imu_topic_.c_str(), e.samples, e.span_s, e.magnitude);
+                      params_.imu_topic.c_str(), e.samples, e.span_s, e.magnitude);
         map_description_ = text;
-        NODELET_INFO("segment %u: %s", segment_, text);
+        NODELET_INFO("map %u: %s", map, text);
         if (e.magnitude < 7.0 || e.magnitude > 12.5) {
           NODELET_WARN("the mean specific force is %.2f m/s^2, not gravity (9.81): check the IMU's units", e.magnitude);
         }
         return;
       }
-      why_not = e.message + ", " + std::to_string(received) + " received on " + imu_topic_;
+      why_not = e.message + ", " + std::to_string(imu_.received()) + " received on " + params_.imu_topic;
     }
-    NODELET_WARN("segment %u: no gravity for the map (%s)", segment_, why_not.c_str());
+    NODELET_WARN("map %u: no gravity for the map (%s)", map, why_not.c_str());
   }
   // A robot's base on tf is z up by REP-103; the calibration's body (~body_frame, e.g. EuRoC's
   // IMU frame, x up) has no such convention: not taken as level.
-  if (!base_frame_.empty() && base_frame_ != body_frame_) {
+  if (!params_.base_frame.empty() && params_.base_frame != params_.body_frame) {
     Eigen::Isometry3d T_c_base;
     if (cameraToBase(&T_c_base, &why_not, 0.2)) {
       T_map_w_ = mapFromBase(T_c_base.inverse(), T_w_c0);
-      map_description_ = "map = " + base_frame_ + " when the first image was taken";
-      NODELET_INFO("segment %u: %s", segment_, map_description_.c_str());
+      map_description_ = "map = " + params_.base_frame + " when the first image was taken";
+      NODELET_INFO("map %u: %s", map, map_description_.c_str());
       return;
     }
-    NODELET_WARN("segment %u: the map cannot follow %s (%s)", segment_, base_frame_.c_str(), why_not.c_str());
+    NODELET_WARN("map %u: the map cannot follow %s (%s)", map, params_.base_frame.c_str(), why_not.c_str());
   }
   T_map_w_ = mapFromCameraAxes(T_w_c0);
   map_description_ = "map = the first camera in ROS axes (x forward, z up): only as level as that camera";
-  NODELET_INFO("segment %u: %s", segment_, map_description_.c_str());
+  NODELET_INFO("map %u: %s", map, map_description_.c_str());
 }
 
-bool TrackingNodelet::imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* why) {
-  if (have_calibration_file_) {
+bool TrackingNodelet::imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* source, std::string* why) {
+  if (!params_.calibration_file.empty()) {
     // The calibration's T_BS (EuRoC) / T_cam_imu (Kalibr): the camera in the body = IMU frame.
     *R_c_imu = T_b_c_.linear().transpose();
+    *source = "~calibration_file's T_BS (" + params_.calibration_file + ")";
     return true;
   }
-  std::string imu_frame;
-  {
-    std::lock_guard<std::mutex> lock(imu_mutex_);
-    imu_frame = imu_frame_;
-  }
+  const std::string imu_frame = imu_.frame();
   if (imu_frame.empty()) {
     *why = "no IMU message yet";
     return false;
@@ -87,6 +81,7 @@ bool TrackingNodelet::imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* why) {
   try {
     const auto t = tf_buffer_->lookupTransform(frame_id_, imu_frame, ros::Time(0), ros::Duration(0.5));
     *R_c_imu = fromTransformMsg(t.transform).linear();
+    *source = "tf " + imu_frame + " -> " + frame_id_;
     return true;
   } catch (const tf2::TransformException& e) {
     *why = "no tf " + imu_frame + " -> " + frame_id_ + " (" + e.what() + ")";
@@ -94,12 +89,54 @@ bool TrackingNodelet::imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* why) {
   }
 }
 
+void TrackingNodelet::checkImuRotation(const vitamin_e::pipeline::FrameResult& result) {
+  // Enough rotation to tell a wrong mounting (tens of degrees off) from gyroscope noise and bias.
+  constexpr double kMinRotationDeg = 8.0;
+  constexpr int kMinIntervals = 10;
+  constexpr double kMaxMeanAngleDeg = 30.0;
+  if (!result.pose_valid) {
+    have_rotation_pose_ = false;
+    return;
+  }
+  const Eigen::Matrix3d R = result.T_w_c.linear();
+  if (have_rotation_pose_) {
+    Eigen::Vector3d theta_imu;
+    Eigen::Matrix3d R_c_imu;
+    std::string source, why;
+    if (imu_.rotationBetween(rotation_pose_t_, result.timestamp, &theta_imu) && imuToCamera(&R_c_imu, &source, &why)) {
+      const Eigen::AngleAxisd step(rotation_pose_R_.transpose() * R);
+      rotation_agreement_.add(step.angle() * step.axis(), R_c_imu * theta_imu);
+      if (rotation_agreement_.cameraRotationDeg() >= kMinRotationDeg &&
+          rotation_agreement_.intervals() >= kMinIntervals) {
+        rotation_checked_ = true;
+        const double angle = rotation_agreement_.meanAngleDeg();
+        if (angle > kMaxMeanAngleDeg) {
+          NODELET_WARN("the camera -> IMU rotation from %s looks wrong for this camera: the camera's turns and the "
+                       "gyroscope's of %s, rotated into the camera, differ by %.0f deg on average (over %.1f deg of "
+                       "rotation, %d frames); the map's z (gravity) is then wrong too. Calibrate T_BS for this "
+                       "camera and IMU (a EuRoC calibration on another sensor's bag does not fit)",
+                       source.c_str(), params_.imu_topic.c_str(), angle, rotation_agreement_.cameraRotationDeg(),
+                       rotation_agreement_.intervals());
+        } else {
+          NODELET_INFO("the camera -> IMU rotation from %s agrees with the gyroscope of %s: %.1f deg apart on average "
+                       "(over %.1f deg of rotation, %d frames)",
+                       source.c_str(), params_.imu_topic.c_str(), angle, rotation_agreement_.cameraRotationDeg(),
+                       rotation_agreement_.intervals());
+        }
+      }
+    }
+  }
+  have_rotation_pose_ = true;
+  rotation_pose_t_ = result.timestamp;
+  rotation_pose_R_ = R;
+}
+
 bool TrackingNodelet::cameraToBase(Eigen::Isometry3d* T_c_base, std::string* why, double timeout_s) {
   if (have_T_c_base_) {
     *T_c_base = T_c_base_;
     return true;
   }
-  if (have_calibration_file_ && !body_frame_.empty() && base_frame_ == body_frame_) {
+  if (!params_.calibration_file.empty() && !params_.body_frame.empty() && params_.base_frame == params_.body_frame) {
     T_c_base_ = T_b_c_.inverse();  // the mounting from the calibration file, published by this nodelet
     have_T_c_base_ = true;
     *T_c_base = T_c_base_;
@@ -111,7 +148,7 @@ bool TrackingNodelet::cameraToBase(Eigen::Isometry3d* T_c_base, std::string* why
   }
   try {
     // The camera's mounting on the base: static, looked up once.
-    const auto t = tf_buffer_->lookupTransform(frame_id_, base_frame_, ros::Time(0), ros::Duration(timeout_s));
+    const auto t = tf_buffer_->lookupTransform(frame_id_, params_.base_frame, ros::Time(0), ros::Duration(timeout_s));
     T_c_base_ = fromTransformMsg(t.transform);
     if (!isFinite(T_c_base_)) {
       *why = "non-finite tf";
@@ -121,24 +158,24 @@ bool TrackingNodelet::cameraToBase(Eigen::Isometry3d* T_c_base, std::string* why
     *T_c_base = T_c_base_;
     return true;
   } catch (const tf2::TransformException& e) {
-    *why = "no tf " + base_frame_ + " -> " + frame_id_ + " (" + e.what() + ")";
+    *why = "no tf " + params_.base_frame + " -> " + frame_id_ + " (" + e.what() + ")";
     return false;
   }
 }
 
 void TrackingNodelet::publishBodyTransform() {
   // ~body_frame -> camera: the calibration file's T_BS as a static transform.
-  if (body_tf_sent_ || body_frame_.empty() || !have_calibration_file_) return;
-  const std::string camera = !camera_frame_.empty() ? camera_frame_ : frame_id_;
+  if (body_tf_sent_ || params_.body_frame.empty() || params_.calibration_file.empty()) return;
+  const std::string camera = !params_.camera_frame.empty() ? params_.camera_frame : frame_id_;
   if (camera.empty()) return;  // the first image names it
   geometry_msgs::TransformStamped t;
   t.header.stamp = ros::Time::now();
-  t.header.frame_id = body_frame_;
+  t.header.frame_id = params_.body_frame;
   t.child_frame_id = camera;
   t.transform = toTransformMsg(T_b_c_);
   static_broadcaster_->sendTransform(t);
   body_tf_sent_ = true;
-  NODELET_INFO("static tf %s -> %s from the calibration's T_BS", body_frame_.c_str(), camera.c_str());
+  NODELET_INFO("static tf %s -> %s from the calibration's T_BS", params_.body_frame.c_str(), camera.c_str());
 }
 
 }  // namespace vitamin_e_ros

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 #include <future>
+#include <stdexcept>
 
 #include <pluginlib/class_list_macros.hpp>
 
@@ -27,117 +28,160 @@ namespace {
 // gap; more wait in the subscriber's queue.
 constexpr std::size_t kBagQueueFrames = 4;
 
-// ~rectified: true, false or "auto" (from the image topic's name).
-std::string rectifiedParam(ros::NodeHandle& pnh) {
-  bool b = false;
-  if (pnh.getParam("rectified", b)) return b ? "true" : "false";
-  std::string s = "auto";
-  pnh.getParam("rectified", s);
-  return s;
-}
-
 }  // namespace
 
 void TrackingNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
-
-  if (!readFrameParameters(pnh)) return;
-  pnh.param<std::string>("trajectory_file", trajectory_file_, "");
-  pnh.param<std::string>("export_points", export_points_, "");
-  std::string legacy_points_file;
-  if (pnh.getParam("map_file", legacy_points_file) && export_points_.empty()) {
-    export_points_ = legacy_points_file;
-    NODELET_WARN("~map_file is the PLY export of the map points, now called ~export_points (~save_map: the map file)");
+  // A nodelet that cannot run says why and throws: the loader unloads it and its load
+  // request fails, so that `nodelet load` (and roslaunch with it) reports the failure.
+  auto fail = [this](const std::string& why) {
+    NODELET_FATAL("%s", why.c_str());
+    return std::runtime_error(why);
+  };
+  ParamNotes notes;
+  try {
+    params_ = readTrackingParams(
+        [&pnh](const std::string& name, XmlRpc::XmlRpcValue* value) { return pnh.getParam(name, *value); }, &notes);
+  } catch (const std::exception& e) {
+    throw fail(std::string(e.what()) + " (the nodelet does not start: fix the parameter and restart)");
   }
-  pnh.param<std::string>("load_map", load_map_, "");
-  pnh.param<std::string>("save_map", save_map_, "");
-  pnh.param("process_all_frames", process_all_frames_, false);
-  pnh.param("reset_on_time_jump", reset_on_time_jump_, true);
-  pnh.param("time_jump_threshold", time_jump_threshold_s_, 1.0);
-  int queue_size = 1;
-  pnh.param("queue_size", queue_size, process_all_frames_ ? 10000 : 1);
-  pnh.param("debug_frame_delay", debug_frame_delay_s_, 0.0);
-  std::string config_file, calibration_file;
-  pnh.param<std::string>("config_file", config_file, "");
-  pnh.param<std::string>("calibration_file", calibration_file, "");
-  if (!(time_jump_threshold_s_ > 0.0)) {
-    NODELET_FATAL("~time_jump_threshold must be > 0 s (got %g)", time_jump_threshold_s_);
-    return;
-  }
-  if (!(debug_frame_delay_s_ >= 0.0 && debug_frame_delay_s_ <= 60.0)) {
-    NODELET_FATAL("~debug_frame_delay must be in [0, 60] s (got %g)", debug_frame_delay_s_);
-    return;
-  }
-  if (debug_frame_delay_s_ > 0.0) {
+  for (const auto& w : notes.warnings) NODELET_WARN("%s", w.c_str());
+  for (const auto& i : notes.infos) NODELET_INFO("%s", i.c_str());
+  if (params_.debug_frame_delay_s > 0.0) {
     NODELET_WARN("~debug_frame_delay %.3f s: every frame is held that long before it is processed (for tests)",
-                 debug_frame_delay_s_);
+                 params_.debug_frame_delay_s);
   }
+  logMapFrameSource();
   // The SLAM thread's input: live, the newest frame only (a frame arriving while one waits
   // replaces it); bags, a few frames and the callback waits when they are full (the rest wait in
   // the subscriber's queue, ~queue_size).
-  queue_ = std::make_unique<SlamQueue<QueuedFrame>>(process_all_frames_ ? kBagQueueFrames : 1, !process_all_frames_);
-
+  queue_ = std::make_unique<SlamQueue<QueuedFrame>>(params_.process_all_frames ? kBagQueueFrames : 1,
+                                                    !params_.process_all_frames);
   try {
-    if (!config_file.empty()) {
-      system_config_ = vitamin_e::pipeline::loadSystemConfig(config_file);
-    }
+    if (!params_.config_file.empty()) system_config_ = vitamin_e::pipeline::loadSystemConfig(params_.config_file);
     system_config_.validate();
   } catch (const std::exception& e) {
-    NODELET_FATAL("~config_file '%s': %s (no subscription: fix the config and restart)", config_file.c_str(), e.what());
-    return;
+    throw fail("~config_file '" + params_.config_file + "': " + e.what() +
+               " (the nodelet does not start: fix the config and restart)");
   }
-  NODELET_INFO("SLAM config %s:\n%s", config_file.empty() ? "(defaults)" : config_file.c_str(),
+  NODELET_INFO("SLAM config %s:\n%s", params_.config_file.empty() ? "(defaults)" : params_.config_file.c_str(),
                system_config_.describe().c_str());
-  if (!load_map_.empty()) {
+  if (!params_.load_map.empty()) {
     try {
-      loaded_map_ = std::make_unique<vitamin_e::map::MapFileContents>(vitamin_e::map::loadMapFile(load_map_));
+      loaded_map_ = std::make_unique<vitamin_e::map::MapFileContents>(vitamin_e::map::loadMapFile(params_.load_map));
     } catch (const std::exception& e) {
-      NODELET_FATAL("~load_map: %s (no subscription: fix the file or the parameter and restart)", e.what());
-      return;
+      throw fail(std::string("~load_map: ") + e.what() +
+                 " (the nodelet does not start: fix the file or the parameter and restart)");
     }
-    NODELET_INFO("~load_map %s: %s", load_map_.c_str(), vitamin_e::map::mapFileHeader(*loaded_map_).c_str());
+    NODELET_INFO("~load_map %s: %s", params_.load_map.c_str(), vitamin_e::map::mapFileHeader(*loaded_map_).c_str());
   }
 
-  path_.header.frame_id = map_frame_;
+  // Images on their own callback queue and thread: in bag mode the callback waits while the
+  // SLAM queue is full, and nothing else (services, reconfigure, camera_info, IMU) waits with it.
+  ros::NodeHandle image_nh(nh);
+  image_nh.setCallbackQueue(&image_queue_);
+  // Whatever can stop the nodelet is checked before anything is advertised: the loader deletes
+  // a nodelet whose onInit threw after its callback queues, and roscpp crashes removing the
+  // callbacks of its publishers then.
+  it_ = std::make_unique<image_transport::ImageTransport>(image_nh);
+  checkTransport(pnh);
+  const std::string image_topic = nh.resolveName("image");
+  rectified_ = params_.rectified == "true" || (params_.rectified == "auto" && isRectifiedTopic(image_topic));
+  if (!params_.calibration_file.empty()) {
+    vitamin_e::camera::CameraCalibration calibration;
+    try {
+      calibration = vitamin_e::camera::loadCalibration(params_.calibration_file);
+    } catch (const std::exception& e) {
+      throw fail("~calibration_file '" + params_.calibration_file + "': " + e.what());
+    }
+    T_b_c_ = calibration.T_b_c;
+    if (rectified_) {
+      NODELET_WARN("%s looks rectified, but ~calibration_file describes the camera with its distortion: "
+                   "set ~rectified false if the file is the rectified camera's",
+                   image_topic.c_str());
+    }
+    makeSession(calibration.camera);
+  } else {
+    NODELET_INFO("no ~calibration_file: waiting for %s (%s)", nh.resolveName("camera_info").c_str(),
+                 rectified_ ? "rectified image: P, no distortion" : "raw image: K and D");
+  }
+
+  advertise(pnh);
+  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+  if (!params_.base_frame.empty() || (!params_.imu_topic.empty() && params_.calibration_file.empty())) {
+    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+  }
+  startDiagnostics(nh, pnh);
+  if (session_) startSlam();
+  // camera_info on the images' queue: it comes just before its image, and in one thread it is
+  // taken first (on another queue the first images would find no calibration yet). Kept after
+  // the calibration, to say when it changes.
+  info_sub_ = image_nh.subscribe("camera_info", 1, &TrackingNodelet::cameraInfoCallback, this);
+  if (!params_.imu_topic.empty()) {
+    // On the nodelet's queue, which no frame holds up: every sample is taken as it arrives,
+    // before the SLAM thread reaches the frames of its time (gravity window before them).
+    imu_sub_ = nh.subscribe(params_.imu_topic, 2000, &TrackingNodelet::imuCallback, this);
+  }
+  publishBodyTransform();  // before any frame: the SLAM thread sends it later otherwise
+  subscribeImages(image_nh, pnh);
+  image_thread_ = std::thread([this] {
+    // disable() (destructor) wakes the wait at once; the timeout only bounds an idle wait.
+    while (image_queue_.isEnabled()) image_queue_.callAvailable(ros::WallDuration(1.0));
+  });
+  started_ = true;
+}
+
+void TrackingNodelet::logMapFrameSource() const {
+  const char* map_frame = params_.map_frame.c_str();
+  if (params_.opticalMap()) {
+    NODELET_INFO("map frame '%s': the first camera's optical frame (~map_convention optical: z forward, y down)",
+                 map_frame);
+  } else if (!params_.imu_topic.empty()) {
+    NODELET_INFO("map frame '%s': z up along gravity from %s (%.2f s of accelerometer before the initialization), "
+                 "x the first camera's heading",
+                 map_frame, params_.imu_topic.c_str(), params_.gravity_window_s);
+  } else if (!params_.base_frame.empty() && params_.base_frame != params_.body_frame) {
+    NODELET_INFO("map frame '%s': the pose of %s when the first image was taken (REP-105; z up for a level robot)",
+                 map_frame, params_.base_frame.c_str());
+  } else {
+    NODELET_INFO("map frame '%s': the first camera in ROS axes (x forward, z up): the map is only as level as "
+                 "the first camera (set ~imu_topic or ~base_frame for a level map)",
+                 map_frame);
+  }
+  if (!params_.odom_frame.empty() && !params_.base_frame.empty()) {
+    NODELET_INFO("REP-105: publishing %s -> %s (from %s -> %s)", map_frame, params_.odom_frame.c_str(),
+                 params_.odom_frame.c_str(), params_.base_frame.c_str());
+  } else if (!params_.base_frame.empty()) {
+    NODELET_INFO("publishing %s -> %s (the camera under the base frame)", map_frame, params_.base_frame.c_str());
+  }
+}
+
+void TrackingNodelet::advertise(ros::NodeHandle& pnh) {
+  path_.header.frame_id = params_.map_frame;
   pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odometry", 10);
   path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
   points_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("points", 2);
   map_points_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("map_points", 1, true);
   status_pub_ = pnh.advertise<vitamin_e::TrackingStatus>("status", 10);
-  frame_pub_ = pnh.advertise<vitamin_e::TrackedFrame>("frame", process_all_frames_ ? 1000 : 5);
-  // Images on their own callback queue and thread: in bag mode the callback waits while the
-  // SLAM queue is full, and nothing else (services, reconfigure, camera_info, IMU) waits with it.
-  ros::NodeHandle image_nh(nh);
-  image_nh.setCallbackQueue(&image_queue_);
-  it_ = std::make_unique<image_transport::ImageTransport>(image_nh);
+  frame_pub_ = pnh.advertise<vitamin_e::TrackedFrame>("frame", params_.process_all_frames ? 1000 : 5);
   image_transport::ImageTransport private_it(pnh);
   tracking_image_pub_ = private_it.advertise("tracking_image", 1);
-
-  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-  static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-  if (!base_frame_.empty() || (!imu_topic_.empty() && calibration_file.empty())) {
-    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
-  }
-  if (!odom_frame_.empty() && !base_frame_.empty()) {
-    NODELET_INFO("REP-105: publishing %s -> %s (from %s -> %s)", map_frame_.c_str(), odom_frame_.c_str(),
-                 odom_frame_.c_str(), base_frame_.c_str());
-  } else if (!base_frame_.empty()) {
-    NODELET_INFO("publishing %s -> %s (the camera under the base frame)", map_frame_.c_str(), base_frame_.c_str());
-  }
 
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<vitamin_e::TrackingConfig>>(reconfigure_mutex_, pnh);
   reconfigure_server_->setCallback([this](vitamin_e::TrackingConfig& c, uint32_t level) { reconfigure(c, level); });
-
   reset_srv_ = pnh.advertiseService("reset", &TrackingNodelet::resetService, this);
   save_trajectory_srv_ = pnh.advertiseService("save_trajectory", &TrackingNodelet::saveTrajectoryService, this);
   save_map_srv_ = pnh.advertiseService("save_map", &TrackingNodelet::saveMapService, this);
   export_points_srv_ = pnh.advertiseService("export_points", &TrackingNodelet::exportPointsService, this);
+}
 
-  // Diagnostics are published from their own thread (below): they never wait for a frame being
+void TrackingNodelet::startDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
+  // Diagnostics are published from their own thread: they never wait for a frame being
   // processed. Every publisher and every subscription but the images' is on the nodelet's
   // single-threaded queue: nodelet::Loader may delete a nodelet inside a callback of one of its
   // queues after the other queue is gone, and roscpp then crashes removing the callbacks of that
@@ -145,144 +189,72 @@ void TrackingNodelet::onInit() {
   // The image queue (images and camera_info) is this nodelet's own: shut down and drained in
   // the destructor.
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, getName());
-  diagnostics_->setHardwareID(camera_frame_.empty() ? "camera" : camera_frame_);
+  diagnostics_->setHardwareID(params_.camera_frame.empty() ? "camera" : params_.camera_frame);
   diagnostics_->add("vitamin_e tracking", this, &TrackingNodelet::diagnose);
-  double diagnostic_period = 1.0;
-  pnh.param("diagnostic_period", diagnostic_period, 1.0);
-  diagnostic_period = std::max(0.05, diagnostic_period);
-  diagnostics_thread_ = std::thread([this, diagnostic_period] {
+  const double period = params_.diagnostic_period_s;
+  diagnostics_thread_ = std::thread([this, period] {
     std::unique_lock<std::mutex> lock(diagnostics_wait_mutex_);
-    while (!diagnostics_wake_.wait_for(lock, std::chrono::duration<double>(diagnostic_period),
+    while (!diagnostics_wake_.wait_for(lock, std::chrono::duration<double>(period),
                                        [this] { return diagnostics_stop_; })) {
       lock.unlock();
       diagnostics_->force_update();
       lock.lock();
     }
   });
-
-  const std::string rectified = rectifiedParam(pnh);
-  if (rectified != "auto" && rectified != "true" && rectified != "false") {
-    NODELET_FATAL("~rectified must be true, false or auto (got '%s')", rectified.c_str());
-    return;
-  }
-  const std::string image_topic = nh.resolveName("image");
-  rectified_ = rectified == "true" || (rectified == "auto" && isRectifiedTopic(image_topic));
-
-  have_calibration_file_ = !calibration_file.empty();
-  if (have_calibration_file_) {
-    try {
-      const auto calibration = vitamin_e::camera::loadCalibration(calibration_file);
-      T_b_c_ = calibration.T_b_c;
-      if (rectified_) {
-        NODELET_WARN("%s looks rectified, but ~calibration_file describes the camera with its distortion: "
-                     "set ~rectified false if the file is the rectified camera's",
-                     image_topic.c_str());
-      }
-      if (!createSystem(calibration.camera)) return;
-    } catch (const std::exception& e) {
-      NODELET_FATAL("~calibration_file '%s': %s", calibration_file.c_str(), e.what());
-      return;
-    }
-  } else {
-    // On the images' queue: camera_info comes just before its image, and in one thread it is
-    // taken first (on another queue the first images would find no calibration yet).
-    info_sub_ = image_nh.subscribe("camera_info", 1, &TrackingNodelet::cameraInfoCallback, this);
-    NODELET_INFO("no ~calibration_file: waiting for %s (%s)", info_sub_.getTopic().c_str(),
-                 rectified_ ? "rectified image: P, no distortion" : "raw image: K and D");
-  }
-  if (!imu_topic_.empty()) {
-    // On the nodelet's queue, which no frame holds up: every sample is taken as it arrives,
-    // before the SLAM thread reaches the frames of its time (gravity window before them).
-    imu_sub_ = nh.subscribe(imu_topic_, 2000, &TrackingNodelet::imuCallback, this);
-  }
-  publishBodyTransform();  // before any frame: the SLAM thread sends it later otherwise
-  if (!subscribeImages(image_nh, pnh, queue_size)) return;
-  image_thread_ = std::thread([this] {
-    // disable() (destructor) wakes the wait at once; the timeout only bounds an idle wait.
-    while (image_queue_.isEnabled()) image_queue_.callAvailable(ros::WallDuration(1.0));
-  });
 }
 
-bool TrackingNodelet::readFrameParameters(ros::NodeHandle& pnh) {
-  pnh.param<std::string>("map_frame", map_frame_, "map");
-  pnh.param<std::string>("camera_frame", camera_frame_, "");
-  pnh.param<std::string>("odom_frame", odom_frame_, "");
-  pnh.param<std::string>("base_frame", base_frame_, "");
-  pnh.param<std::string>("body_frame", body_frame_, "");
-  pnh.param<std::string>("imu_topic", imu_topic_, "");
-  pnh.param("gravity_window", gravity_window_s_, 1.0);
-  std::string convention;
-  pnh.param<std::string>("map_convention", convention, "z_up");
-  if (convention != "z_up" && convention != "optical") {
-    NODELET_FATAL("~map_convention must be z_up or optical (got '%s')", convention.c_str());
-    return false;
-  }
-  if (!(gravity_window_s_ > 0.0)) {
-    NODELET_FATAL("~gravity_window must be > 0 s (got %g)", gravity_window_s_);
-    return false;
-  }
-  optical_map_ = convention == "optical";
-  if (optical_map_) {
-    NODELET_INFO("map frame '%s': the first camera's optical frame (~map_convention optical: z forward, y down)",
-                 map_frame_.c_str());
-  } else if (!imu_topic_.empty()) {
-    NODELET_INFO("map frame '%s': z up along gravity from %s (%.2f s of accelerometer before the initialization), "
-                 "x the first camera's heading",
-                 map_frame_.c_str(), imu_topic_.c_str(), gravity_window_s_);
-  } else if (!base_frame_.empty() && base_frame_ != body_frame_) {
-    NODELET_INFO("map frame '%s': the pose of %s when the first image was taken (REP-105; z up for a level robot)",
-                 map_frame_.c_str(), base_frame_.c_str());
-  } else {
-    NODELET_INFO("map frame '%s': the first camera in ROS axes (x forward, z up): the map is only as level as "
-                 "the first camera (set ~imu_topic or ~base_frame for a level map)",
-                 map_frame_.c_str());
-  }
-  return true;
-}
-
-bool TrackingNodelet::subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle& pnh, int queue_size) {
+void TrackingNodelet::checkTransport(ros::NodeHandle& pnh) {
   // The transport is the nodelet's own ~image_transport (image_transport's default reads the
   // manager's private namespace instead).
-  const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
+  const image_transport::TransportHints hints(params_.image_transport, ros::TransportHints(), pnh);
   transport_ = hints.getTransport();
   const auto loadable = it_->getLoadableTransports();
-  const bool available =
-      std::find(loadable.begin(), loadable.end(), "image_transport/" + transport_) != loadable.end() ||
-      std::find(loadable.begin(), loadable.end(), transport_) != loadable.end();
-  const uint32_t queue = static_cast<uint32_t>(std::max(1, queue_size));
-  const char* mode = process_all_frames_ ? "every frame processed: the SLAM queue waits when full"
-                                         : "live: the SLAM takes the newest frame, stale frames are dropped";
-  if (available) {
+  transport_plugin_ = std::find(loadable.begin(), loadable.end(), "image_transport/" + transport_) != loadable.end() ||
+                      std::find(loadable.begin(), loadable.end(), transport_) != loadable.end();
+  if (transport_plugin_ || transport_ == "compressed") return;
+  std::string names;
+  for (const auto& l : loadable) names += (names.empty() ? "" : ", ") + l;
+  const std::string why = "~image_transport '" + transport_ + "' is not installed (installed: " + names +
+                          "; 'compressed' is decoded here even without its plugin): the nodelet does not start";
+  NODELET_FATAL("%s", why.c_str());
+  throw std::runtime_error(why);
+}
+
+void TrackingNodelet::subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle& pnh) {
+  const image_transport::TransportHints hints(params_.image_transport, ros::TransportHints(), pnh);
+  const int queue_size = params_.subscriberQueue();
+  const uint32_t queue = static_cast<uint32_t>(queue_size);
+  const char* mode = params_.process_all_frames ? "every frame processed: the SLAM queue waits when full"
+                                                : "live: the SLAM takes the newest frame, stale frames are dropped";
+  if (transport_plugin_) {
     image_sub_ = it_->subscribe("image", queue, &TrackingNodelet::imageCallback, this, hints);
     NODELET_INFO("subscribed to %s (transport %s, queue %d, %s)", image_sub_.getTopic().c_str(), transport_.c_str(),
                  queue_size, mode);
-    return true;
+    return;
   }
-  if (transport_ == "compressed") {
-    // Debian's ROS has no compressed_image_transport: read the CompressedImage topic directly.
-    compressed_sub_ = image_nh.subscribe(image_nh.resolveName("image") + "/compressed", queue,
-                                         &TrackingNodelet::compressedCallback, this);
-    NODELET_INFO("image_transport plugin 'compressed' not installed: subscribed to %s (sensor_msgs/CompressedImage, "
-                 "decoded with OpenCV; queue %d, %s)",
-                 compressed_sub_.getTopic().c_str(), queue_size, mode);
-    return true;
-  }
-  std::string names;
-  for (const auto& l : loadable) names += (names.empty() ? "" : ", ") + l;
-  NODELET_FATAL("~image_transport '%s' is not installed (installed: %s; 'compressed' is decoded here even without "
-                "its plugin): no image subscription",
-                transport_.c_str(), names.c_str());
-  return false;
+  // Debian's ROS has no compressed_image_transport: read the CompressedImage topic directly.
+  compressed_sub_ = image_nh.subscribe(image_nh.resolveName("image") + "/compressed", queue,
+                                       &TrackingNodelet::compressedCallback, this);
+  NODELET_INFO("image_transport plugin 'compressed' not installed: subscribed to %s (sensor_msgs/CompressedImage, "
+               "decoded with OpenCV; queue %d, %s)",
+               compressed_sub_.getTopic().c_str(), queue_size, mode);
 }
 
-bool TrackingNodelet::createSystem(const vitamin_e::camera::Camera& camera) {
+void TrackingNodelet::createSession(const vitamin_e::camera::Camera& camera) {
+  makeSession(camera);
+  startSlam();
+}
+
+void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
+  const auto fail = [this](const std::string& why) {
+    NODELET_FATAL("%s", why.c_str());
+    return std::runtime_error(why);
+  };
   try {
-    system_ = std::make_unique<vitamin_e::pipeline::System>(system_config_, camera);
+    session_ = std::make_unique<vitamin_e::pipeline::Session>(system_config_, camera, params_.session());
   } catch (const std::exception& e) {
-    NODELET_FATAL("cannot start the SLAM system: %s", e.what());
-    return false;
+    throw fail(std::string("cannot start the SLAM system: ") + e.what());
   }
-  camera_ = camera;
   NODELET_INFO("camera: %s", camera.describe().c_str());
   bool localization_only = false;
   {
@@ -291,33 +263,29 @@ bool TrackingNodelet::createSystem(const vitamin_e::camera::Camera& camera) {
   }
   if (loaded_map_) {
     try {
-      system_->loadMap(*loaded_map_);
+      session_->system().loadMap(*loaded_map_);
     } catch (const std::exception& e) {
-      NODELET_FATAL("~load_map '%s': %s (no subscription: fix the file or the parameter and restart)",
-                    load_map_.c_str(), e.what());
-      system_.reset();
-      image_sub_.shutdown();
-      compressed_sub_.shutdown();
-      info_sub_.shutdown();
-      return false;
+      session_.reset();
+      throw fail("~load_map '" + params_.load_map + "': " + e.what() +
+                 " (nothing is processed: fix the file or the parameter and restart)");
     }
     loaded_map_.reset();
-    NODELET_INFO("relocalizing in the loaded map %s%s", load_map_.c_str(),
+    NODELET_INFO("relocalizing in the loaded map %s%s", params_.load_map.c_str(),
                  localization_only ? " (localization only)" : "");
   }
-  system_->setLocalizationOnly(localization_only);
-  updateSnapshot();
-  // From here on system_ and the [SLAM] state are the SLAM thread's (the thread's start orders
-  // the writes above before its first read).
+  session_->system().setLocalizationOnly(localization_only);
+  snapshot_.update(*session_, T_map_w_);
   camera_width_ = camera.width();
   camera_height_ = camera.height();
+}
+
+void TrackingNodelet::startSlam() {
+  // From here on session_ and the [SLAM] state are the SLAM thread's (the thread's start orders
+  // the writes above before its first read).
   slam_thread_ = std::thread([this] { slamLoop(); });
   calibrated_ = true;
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    stats_.calibrated = true;
-  }
-  return true;
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.calibrated = true;
 }
 
 void TrackingNodelet::stopThreads() {
@@ -345,54 +313,78 @@ TrackingNodelet::~TrackingNodelet() {
   }
   stopThreads();
   // The SLAM thread has ended: its state is this thread's now.
-  if (system_) {  // stderr: rosout may be gone at shutdown
-    const auto q = queue_->counts();
-    std::fprintf(stderr,
-                 "[vitamin_e] %zu frames processed, %zu tracked, %d init retries, %d relocalizations, %u segment(s); "
-                 "%zu frames dropped by the live queue, %zu still queued at shutdown (not processed)\n%s",
-                 finished_processed_ + system_->framesProcessed(), finished_tracked_ + system_->framesTracked(),
-                 finished_retries_ + system_->initRetries(), finished_relocalizations_ + system_->relocalizations(),
-                 segment_, q.dropped, q.discarded, system_->timings().table().c_str());
-  }
+  if (session_ && started_) saveOnShutdown();
+}
+
+void TrackingNodelet::saveOnShutdown() {
+  // stderr: rosout may be gone at shutdown.
+  const auto q = queue_->counts();
+  std::fprintf(stderr,
+               "[vitamin_e] %zu frames processed, %zu tracked, %d init retries, %d relocalizations, %u segment(s) in "
+               "%u map(s), %zu time jump(s); %zu frames dropped by the live queue, %zu still queued at shutdown (not "
+               "processed)\n%s",
+               session_->framesProcessed(), session_->framesTracked(), session_->initRetries(),
+               session_->relocalizations(), session_->segment(), session_->map(), session_->timeJumps(), q.dropped,
+               q.discarded, session_->system().timings().table().c_str());
   std::string message;
-  if (system_ && !trajectory_file_.empty()) {
-    saveTrajectory(trajectory_file_, &message);
+  if (!params_.trajectory_file.empty()) {
+    saveTrajectory(params_.trajectory_file, &message);
     std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
-  if (system_ && !export_points_.empty()) {
-    exportPoints(export_points_, &message);
+  if (!params_.export_points.empty()) {
+    writePoints(mapPointsInMap(), params_.export_points, &message);
     std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
-  if (system_ && !save_map_.empty()) {
-    if (system_->localizationOnly()) {
-      message = "localization only: the map is unchanged, " + save_map_ + " not written";
+  if (!params_.save_map.empty()) {
+    if (session_->system().localizationOnly()) {
+      message = "localization only: the map is unchanged, " + params_.save_map + " not written";
     } else {
-      saveMap(save_map_, &message);
+      writeMap(session_->system().exportMap(), params_.save_map, &message);
     }
     std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
 }
 
 void TrackingNodelet::cameraInfoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
+  vitamin_e::camera::Camera camera;
+  try {
+    camera = cameraFromInfo(*msg, rectified_);
+  } catch (const std::exception& e) {
+    NODELET_ERROR_THROTTLE(5.0, "camera_info rejected: %s", e.what());
+    return;
+  }
   if (calibrated_) {
-    info_sub_.shutdown();
+    // The calibration is fixed at start-up; a later change is said once.
+    if (!params_.calibration_file.empty() || info_change_warned_ || !info_camera_.valid()) return;
+    const auto differs = [](double a, double b) { return std::abs(a - b) > 1e-6 * std::max(1.0, std::abs(b)); };
+    const bool changed = camera.width() != info_camera_.width() || camera.height() != info_camera_.height() ||
+                         differs(camera.fx(), info_camera_.fx()) || differs(camera.fy(), info_camera_.fy()) ||
+                         differs(camera.cx(), info_camera_.cx()) || differs(camera.cy(), info_camera_.cy()) ||
+                         camera.model() != info_camera_.model() || camera.distortion() != info_camera_.distortion();
+    if (changed) {
+      info_change_warned_ = true;
+      NODELET_WARN("camera_info changed: now %s, the SLAM keeps %s (the calibration is taken once, at start-up: "
+                   "restart the tracker to use the new one); said once",
+                   camera.describe().c_str(), info_camera_.describe().c_str());
+    }
     return;
   }
   try {
-    if (createSystem(cameraFromInfo(*msg, rectified_))) info_sub_.shutdown();
-  } catch (const std::exception& e) {
-    NODELET_ERROR_THROTTLE(5.0, "camera_info rejected: %s", e.what());
+    createSession(camera);
+    info_camera_ = camera;
+  } catch (const std::exception&) {
+    // Said by createSession (FATAL); the nodelet stays without a SLAM: nothing is processed.
+    info_sub_.shutdown();
+    image_sub_.shutdown();
+    compressed_sub_.shutdown();
   }
 }
 
 void TrackingNodelet::imuCallback(const sensor_msgs::ImuConstPtr& msg) {
   const auto& a = msg->linear_acceleration;
-  std::lock_guard<std::mutex> lock(imu_mutex_);
-  if (imu_frame_.empty()) imu_frame_ = msg->header.frame_id;
-  // Bounded: a SLAM far behind a bag must not let the buffer grow without end (about 8 min at 200 Hz).
-  if (gravity_.size() >= 100000) gravity_.dropBefore(gravity_.newest() - 2.0 * gravity_window_s_);
-  gravity_.add(msg->header.stamp.toSec(), Eigen::Vector3d(a.x, a.y, a.z));
-  ++imu_samples_;
+  const auto& w = msg->angular_velocity;
+  imu_.add(msg->header.stamp.toSec(), Eigen::Vector3d(a.x, a.y, a.z), Eigen::Vector3d(w.x, w.y, w.z),
+           msg->header.frame_id);
 }
 
 void TrackingNodelet::imageCallback(const sensor_msgs::ImageConstPtr& msg) {
@@ -453,7 +445,7 @@ void TrackingNodelet::slamLoop() {
     }
     // ~debug_frame_delay: the frame is in progress for that long (a slow SLAM, for tests);
     // shutting down ends the wait, and the frame is not processed.
-    if (debug_frame_delay_s_ > 0.0 && !queue_->waitFor(debug_frame_delay_s_)) continue;
+    if (params_.debug_frame_delay_s > 0.0 && !queue_->waitFor(params_.debug_frame_delay_s)) continue;
     processFrame(*frame);
   }
 }
@@ -492,47 +484,46 @@ void TrackingNodelet::processFrame(const QueuedFrame& frame) {
     std::lock_guard<std::mutex> lock(options_mutex_);
     options_ = dyn_;
   }
-  if (system_->localizationOnly() != options_.localization_only) {
-    system_->setLocalizationOnly(options_.localization_only);
-  }
-  if (have_last_stamp_ && header.stamp <= last_stamp_) {
-    const double back = (last_stamp_ - header.stamp).toSec();
-    if (reset_on_time_jump_ && back > time_jump_threshold_s_) {
-      // A bag played again (--loop) or a clock reset: a new SLAM run instead of dropping every frame.
-      char why[160];
-      std::snprintf(why, sizeof(why), "stamp jumped back by %.3f s (%.3f -> %.3f)", back, last_stamp_.toSec(),
-                    header.stamp.toSec());
-      NODELET_WARN("%s: SLAM restarted, trajectory segment %u begins (~reset_on_time_jump)", why, segment_ + 1);
-      startSegment(std::string("time jump: ") + why);
-    } else {
-      noteRejected();
-      NODELET_ERROR_THROTTLE(2.0, "image dropped: stamp %.9f does not increase (last %.9f)", header.stamp.toSec(),
-                             last_stamp_.toSec());
-      return;
-    }
-  }
-  have_last_stamp_ = true;
-  last_stamp_ = header.stamp;
-
-  frame_id_ = !camera_frame_.empty() ? camera_frame_ : (header.frame_id.empty() ? "camera" : header.frame_id);
+  vitamin_e::pipeline::System& system = session_->system();
+  if (system.localizationOnly() != options_.localization_only) system.setLocalizationOnly(options_.localization_only);
+  frame_id_ =
+      !params_.camera_frame.empty() ? params_.camera_frame : (header.frame_id.empty() ? "camera" : header.frame_id);
   if (!body_tf_sent_) publishBodyTransform();
+  const unsigned map_before = session_->map();
   const auto start = std::chrono::steady_clock::now();
-  FrameResult result;
+  vitamin_e::pipeline::SessionFrame f;
   try {
-    result = system_->process(frame.gray, header.stamp.toSec(), stampText(header.stamp.sec, header.stamp.nsec));
+    f = session_->process(frame.gray, header.stamp.toSec(), stampText(header.stamp.sec, header.stamp.nsec));
   } catch (const std::exception& e) {
     noteRejected();
     NODELET_ERROR_THROTTLE(2.0, "frame %.9f not processed: %s", header.stamp.toSec(), e.what());
     return;
   }
-  const double ms = vitamin_e::elapsedMs(start);
-  if (result.pose_valid && !have_map_) alignMap(result);
-  if (!have_map_) {
-    // Until the map is fixed: samples older than any later frame's gravity window are not needed.
-    std::lock_guard<std::mutex> imu_lock(imu_mutex_);
-    gravity_.dropBefore(header.stamp.toSec() - gravity_window_s_ - 1.0);
+  if (!f.processed) {
+    noteRejected();
+    NODELET_ERROR_THROTTLE(2.0, "image dropped: %s", f.dropped_why.c_str());
+    return;
   }
-  updateSnapshot();
+  const double ms = vitamin_e::elapsedMs(start);
+  FrameResult& result = f.result;
+  if (f.time_jump) {
+    NODELET_WARN("%s: trajectory segment %u begins in map %u (~time_jump relocalize; ~reset starts a new map)",
+                 session_->segmentNote().c_str(), session_->segment(), session_->map());
+    if (session_->map() != map_before) {
+      // Nothing to relocalize in: the session started a new map, with a map frame of its own.
+      snapshot_.update(*session_, T_map_w_);
+      have_map_ = false;
+      T_map_w_ = Eigen::Isometry3d::Identity();
+      map_description_.clear();
+    }
+    startPath();
+  }
+  if (result.pose_valid && !have_map_) alignMap(result);
+  // IMU samples older than any later frame's gravity window (until the map is fixed), or than
+  // the rotation check's last interval, are not needed.
+  imu_.dropBefore(header.stamp.toSec() - (have_map_ ? 2.0 : params_.gravity_window_s + 1.0));
+  if (!params_.imu_topic.empty() && !rotation_checked_) checkImuRotation(result);
+  snapshot_.update(*session_, T_map_w_);
   // Everything published is in the map frame: T_map_c = T_map_w T_w_c, p_map = T_map_w p_w.
   if (have_map_) {
     result.T_w_c = T_map_w_ * result.T_w_c;
@@ -541,60 +532,30 @@ void TrackingNodelet::processFrame(const QueuedFrame& frame) {
     }
   }
   publishResult(result, frame, ms);
+  previous_pose_valid_ = result.pose_valid;
 }
 
-void TrackingNodelet::updateSnapshot() {
-  const auto& trajectory = system_->trajectory();
-  const std::string note = segmentNote();
-  std::lock_guard<std::mutex> lock(snapshot_mutex_);
-  auto& current = snapshot_.current;
-  // Poses are appended, and only the newest is refined within its own frame: copy from the
-  // last one copied (all of them if the trajectory is not the one copied so far).
-  std::size_t from = current.empty() ? 0 : current.size() - 1;
-  if (trajectory.size() < current.size()) from = 0;
-  current.resize(from);
-  current.insert(current.end(), trajectory.begin() + static_cast<std::ptrdiff_t>(from), trajectory.end());
-  snapshot_.T_map_w = T_map_w_;
-  snapshot_.note = note;
-}
-
-void TrackingNodelet::startSegment(const std::string& why) {
-  {
-    std::lock_guard<std::mutex> lock(snapshot_mutex_);
-    TrajectorySegment done;
-    done.note = segmentNote();
-    for (auto e : system_->trajectory()) {
-      e.T_w_c = T_map_w_ * e.T_w_c;
-      done.poses.push_back(e);
-    }
-    if (!done.poses.empty()) snapshot_.finished.push_back(std::move(done));
-    snapshot_.current.clear();
-  }
-  finished_processed_ += system_->framesProcessed();
-  finished_tracked_ += system_->framesTracked();
-  finished_retries_ += system_->initRetries();
-  finished_relocalizations_ += system_->relocalizations();
-  // A fresh system: no map, no tracks and no last stamp (System::reset keeps the stamp).
-  system_ = std::make_unique<vitamin_e::pipeline::System>(system_config_, camera_);
-  system_->setLocalizationOnly(options_.localization_only);
-  ++segment_;
-  segment_note_ = why;
-  have_last_stamp_ = false;
+void TrackingNodelet::resetMap(const std::string& why) {
+  session_->reset(why);
+  snapshot_.update(*session_, T_map_w_);  // the finished segment, in the old map frame
   have_map_ = false;
   T_map_w_ = Eigen::Isometry3d::Identity();
   map_description_.clear();
-  last_map_points_ = ros::Time();
-  track_history_.clear();
-  path_.poses.clear();
-  path_pub_.publish(path_);
-  updateSnapshot();
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  stats_.segment = segment_;
+  have_rotation_pose_ = false;
+  startPath();
+  snapshot_.update(*session_, T_map_w_);
 }
 
-std::string TrackingNodelet::segmentNote() const {
-  // Why the segment began, and its map (each segment has its own).
-  return segment_note_ + (map_description_.empty() ? "" : "; " + map_description_);
+void TrackingNodelet::startPath() {
+  last_map_points_ = ros::Time();
+  track_history_.clear();
+  previous_pose_valid_ = false;
+  have_rotation_pose_ = false;
+  path_.poses.clear();
+  path_pub_.publish(path_);
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.segment = session_->segment();
+  stats_.map = session_->map();
 }
 
 void TrackingNodelet::reconfigure(vitamin_e::TrackingConfig& config, uint32_t) {
@@ -608,12 +569,13 @@ void TrackingNodelet::reconfigure(vitamin_e::TrackingConfig& config, uint32_t) {
 }
 
 bool TrackingNodelet::resetService(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  unsigned segment = 0;
+  unsigned segment = 0, map = 0;
   std::string why;
   res.success = runOnSlamThread(
       [&] {
-        startSegment("~reset");
-        segment = segment_;
+        resetMap("~reset");
+        segment = session_->segment();
+        map = session_->map();
       },
       &why);
   if (!res.success) {
@@ -621,7 +583,7 @@ bool TrackingNodelet::resetService(std_srvs::Trigger::Request&, std_srvs::Trigge
     return true;
   }
   res.message = "map, tracks, last stamp and path reset; trajectory segment " + std::to_string(segment) +
-                " begins (earlier segments kept)";
+                " begins in map " + std::to_string(map) + " (earlier segments kept)";
   NODELET_INFO("%s", res.message.c_str());
   return true;
 }
@@ -632,24 +594,13 @@ bool TrackingNodelet::saveTrajectory(const std::string& path, std::string* messa
     return false;
   }
   // A copy of the snapshot: the SLAM thread goes on while the file is written.
-  std::vector<TrajectorySegment> all;
-  {
-    std::lock_guard<std::mutex> lock(snapshot_mutex_);
-    all = snapshot_.finished;
-    TrajectorySegment current;
-    current.note = snapshot_.note;
-    current.poses.reserve(snapshot_.current.size());
-    for (auto e : snapshot_.current) {
-      e.T_w_c = snapshot_.T_map_w * e.T_w_c;
-      current.poses.push_back(e);
-    }
-    if (!current.poses.empty() || all.empty()) all.push_back(std::move(current));
-  }
+  const std::vector<vitamin_e::pipeline::TrajectorySegment> all = snapshot_.segments();
   std::size_t poses = 0;
   for (const auto& s : all) poses += s.poses.size();
-  const std::string header = "T_map_c: camera (optical) in '" + map_frame_ + "'; each segment has its own map";
+  const std::string header =
+      "T_map_c: camera (optical) in '" + params_.map_frame + "'; each map has its own frame and scale";
   std::string error;
-  if (!saveSegmentsTum(all, header, path, &error)) {
+  if (!vitamin_e::pipeline::saveSegmentsTum(all, header, path, &error)) {
     *message = "cannot write trajectory " + path + ": " + error;
     return false;
   }
@@ -664,16 +615,8 @@ bool TrackingNodelet::saveTrajectory(const std::string& path, std::string* messa
   return true;
 }
 
-bool TrackingNodelet::saveMap(const std::string& path, std::string* message) {
-  return writeMap(system_->exportMap(), path, message);
-}
-
-bool TrackingNodelet::exportPoints(const std::string& path, std::string* message) {
-  return writePoints(mapPointsInMap(), path, message);
-}
-
 std::vector<vitamin_e::pipeline::MapPoint3> TrackingNodelet::mapPointsInMap() const {
-  auto points = system_->mapPoints();
+  auto points = session_->system().mapPoints();
   for (auto& p : points) p.p_w = T_map_w_ * p.p_w;
   return points;
 }
@@ -696,13 +639,16 @@ bool TrackingNodelet::writePoints(const std::vector<vitamin_e::pipeline::MapPoin
     *message = "cannot write map points " + path + ": " + error;
     return false;
   }
-  *message = "map points (" + std::to_string(points.size()) + " in '" + map_frame_ + "', PLY) written to " + path;
+  *message =
+      "map points (" + std::to_string(points.size()) + " in '" + params_.map_frame + "', PLY) written to " + path;
   return true;
 }
 
 bool TrackingNodelet::saveTrajectoryService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res) {
   auto save = [this](const std::string& path, std::string* message) { return saveTrajectory(path, message); };
-  if (answerSaveFile(req, trajectory_file_, "trajectory_file", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
+  if (answerSaveFile(req, params_.trajectory_file, "trajectory_file", "", &res, save)) {
+    NODELET_INFO("%s", res.message.c_str());
+  }
   return true;
 }
 
@@ -710,10 +656,10 @@ bool TrackingNodelet::saveMapService(vitamin_e::SaveFile::Request& req, vitamin_
   // The map is the SLAM thread's: copied there between two frames, written here.
   auto save = [this](const std::string& path, std::string* message) {
     vitamin_e::map::MapFileContents contents;
-    if (!runOnSlamThread([&] { contents = system_->exportMap(); }, message)) return false;
+    if (!runOnSlamThread([&] { contents = session_->system().exportMap(); }, message)) return false;
     return writeMap(contents, path, message);
   };
-  if (answerSaveFile(req, save_map_, "save_map", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
+  if (answerSaveFile(req, params_.save_map, "save_map", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
   return true;
 }
 
@@ -723,7 +669,9 @@ bool TrackingNodelet::exportPointsService(vitamin_e::SaveFile::Request& req, vit
     if (!runOnSlamThread([&] { points = mapPointsInMap(); }, message)) return false;
     return writePoints(points, path, message);
   };
-  if (answerSaveFile(req, export_points_, "export_points", "", &res, save)) NODELET_INFO("%s", res.message.c_str());
+  if (answerSaveFile(req, params_.export_points, "export_points", "", &res, save)) {
+    NODELET_INFO("%s", res.message.c_str());
+  }
   return true;
 }
 

@@ -1,14 +1,15 @@
 #pragma once
-// vitamin_e/TrackingNodelet: images in, SLAM outputs (tf, pose, odometry, path,
-// clouds, status, diagnostics, per-frame messages for the mesher) out. A thin
-// layer: every estimate comes from pipeline::System; this class converts,
+// vitamin_e/TrackingNodelet: images in, SLAM outputs (tf, pose, odometry, path, clouds,
+// status, diagnostics, per-frame messages for the mesher) out. ROS wiring only: the
+// parameters come from readTrackingParams (tracking_params.h), every estimate, the stamp
+// order and the trajectory segments from pipeline::Session; this class converts,
 // re-expresses in the map frame (map_frame.h) and publishes.
 //
-// Threads (issue 15, item 8):
+// Threads:
 //   image thread   own callback queue (image_queue_): camera_info (calibration, starts the
 //                  SLAM thread), then converts each image and pushes it into queue_ (live:
 //                  newest only; ~process_all_frames: blocks when full)
-//   SLAM thread    owns system_ and everything marked [SLAM] below: takes the frames (and
+//   SLAM thread    owns session_ and everything marked [SLAM] below: takes the frames (and
 //                  the commands the services post) from queue_, runs the SLAM, publishes
 //   nodelet queue  (single-threaded) IMU, services, dynamic_reconfigure: they
 //                  never wait for a frame being processed; ~save_trajectory reads a snapshot,
@@ -45,13 +46,15 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "trajectory_snapshot.h"
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackingConfig.h"
 #include "vitamin_e/pipeline/dense_input.h"
-#include "vitamin_e/pipeline/system.h"
+#include "vitamin_e/pipeline/session.h"
+#include "vitamin_e/ros/imu_buffer.h"
 #include "vitamin_e/ros/map_frame.h"
 #include "vitamin_e/ros/slam_queue.h"
-#include "vitamin_e/ros/trajectory_segments.h"
+#include "vitamin_e/ros/tracking_params.h"
 
 namespace vitamin_e_ros {
 
@@ -68,11 +71,21 @@ class TrackingNodelet : public nodelet::Nodelet {
     double received_wall = 0.0;  // when the callback queued it (queue wait in the diagnostics)
   };
 
+  // onInit throws std::runtime_error (after a FATAL saying why) when the nodelet cannot run:
+  // nodelet::Loader then unloads it and `nodelet load` (or tracking_node) exits non-zero.
   void onInit() override;
-  bool readFrameParameters(ros::NodeHandle& pnh);
-  bool subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle& pnh, int queue_size);
-  // Builds system_ (and loads ~load_map), then starts the SLAM thread.
-  bool createSystem(const vitamin_e::camera::Camera& camera);
+  void logMapFrameSource() const;
+  void advertise(ros::NodeHandle& pnh);
+  void startDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  // ~image_transport: a plugin, or compressed (decoded here); throws (after a FATAL) otherwise.
+  void checkTransport(ros::NodeHandle& pnh);
+  void subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle& pnh);
+  // makeSession, then startSlam.
+  void createSession(const vitamin_e::camera::Camera& camera);
+  // Builds session_ (and loads ~load_map). Throws std::runtime_error (after a FATAL) when it
+  // cannot.
+  void makeSession(const vitamin_e::camera::Camera& camera);
+  void startSlam();  // the SLAM thread, on session_
   void imageCallback(const sensor_msgs::ImageConstPtr& msg);
   void compressedCallback(const sensor_msgs::CompressedImageConstPtr& msg);
   // The image callbacks' end: the calibration's size checked, the frame queued.
@@ -86,14 +99,13 @@ class TrackingNodelet : public nodelet::Nodelet {
   bool exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
   // The trajectory from the snapshot (any thread).
   bool saveTrajectory(const std::string& path, std::string* message);
-  // The map file / the map points as PLY, from system_: after the SLAM thread has ended.
-  bool saveMap(const std::string& path, std::string* message);
-  bool exportPoints(const std::string& path, std::string* message);
-  // system_'s map points in the map frame: on the SLAM thread (or after it has ended).
+  // session_'s map points in the map frame: on the SLAM thread (or after it has ended).
   std::vector<vitamin_e::pipeline::MapPoint3> mapPointsInMap() const;
   bool writeMap(const vitamin_e::map::MapFileContents& contents, const std::string& path, std::string* message);
   bool writePoints(const std::vector<vitamin_e::pipeline::MapPoint3>& points, const std::string& path,
                    std::string* message);
+  // The files of the parameters, written after the SLAM thread has ended (destructor).
+  void saveOnShutdown();
   // Runs `work` on the SLAM thread before its next frame and waits for it (services). False
   // (and *why) when there is no SLAM thread or it is shutting down.
   bool runOnSlamThread(const std::function<void()>& work, std::string* why);
@@ -102,18 +114,19 @@ class TrackingNodelet : public nodelet::Nodelet {
 
   // The SLAM thread (all [SLAM] state).
   void slamLoop();
-  // Stamp checks, time jumps, SLAM, map frame, publishing.
+  // Stamp checks and time jumps (the session), SLAM, map frame, publishing.
   void processFrame(const QueuedFrame& frame);
-  // Ends the current SLAM run (its poses become a finished segment) and starts a fresh one:
-  // no map, no last stamp, an empty path.
-  void startSegment(const std::string& why);
-  std::string segmentNote() const;
-  // The services' copy of the trajectory, after every frame and segment change.
-  void updateSnapshot();
+  // A new map (~reset): the session's next segment, the map frame and the path start over.
+  void resetMap(const std::string& why);
+  // A new segment began (a time jump, or a reset): the path and the track trails start over.
+  void startPath();
 
   // The map frame (tracking_map_frame.cpp); SLAM thread.
   void alignMap(const vitamin_e::pipeline::FrameResult& result);
-  bool imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* why);
+  bool imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* source, std::string* why);
+  // The camera's turns against the gyroscope's (the camera -> IMU rotation), once enough
+  // rotation was seen: a WARN when they disagree.
+  void checkImuRotation(const vitamin_e::pipeline::FrameResult& result);
   // The camera's mounting on ~base_frame (static): from the calibration when ~base_frame is
   // ~body_frame, else looked up once on tf (waiting at most timeout_s).
   bool cameraToBase(Eigen::Isometry3d* T_c_base, std::string* why, double timeout_s = 0.0);
@@ -142,39 +155,29 @@ class TrackingNodelet : public nodelet::Nodelet {
     std::string state_name, message;
     std::size_t tracked = 0, mapped = 0, map_size = 0;
     int init_retries = 0;
-    unsigned segment = 1;
+    unsigned segment = 1, map = 1;
     bool calibrated = false;
   };
   void noteReceived(const ros::Time& stamp);
   void noteRejected();
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
-  // Parameters (read once in onInit, constant afterwards).
-  std::string map_frame_ = "map";
-  std::string camera_frame_;  // empty: the image's frame_id
-  std::string odom_frame_;
-  std::string base_frame_;
-  std::string body_frame_;  // frame of the calibration's T_BS (camera in body/IMU)
-  std::string imu_topic_;
-  std::string trajectory_file_;
-  std::string transport_ = "raw";
-  std::string export_points_;  // PLY of the map points, written on shutdown (~export_points; ~map_file before)
-  std::string load_map_;       // map file loaded at start-up
-  std::string save_map_;       // map file written on shutdown (not in localization-only mode)
-  std::unique_ptr<vitamin_e::map::MapFileContents> loaded_map_;  // ~load_map, until the system takes it
-  bool process_all_frames_ = false;
-  bool optical_map_ = false;  // ~map_convention: optical (the core's world frame)
-  double gravity_window_s_ = 1.0;
-  bool reset_on_time_jump_ = true;
-  double time_jump_threshold_s_ = 1.0;
-  double debug_frame_delay_s_ = 0.0;  // ~debug_frame_delay: each frame held this long (tests)
+  // Parameters (read once in onInit, constant afterwards), and what they load.
+  TrackingParams params_;
+  vitamin_e::pipeline::SystemConfig system_config_;
+  Eigen::Isometry3d T_b_c_ = Eigen::Isometry3d::Identity();      // ~calibration_file's T_BS
+  std::unique_ptr<vitamin_e::map::MapFileContents> loaded_map_;  // ~load_map, until the session takes it
   bool rectified_ = false;
-  bool have_calibration_file_ = false;
-  Eigen::Isometry3d T_b_c_ = Eigen::Isometry3d::Identity();  // from ~calibration_file
+  std::string transport_ = "raw";
+  bool transport_plugin_ = false;  // transport_ has an image_transport plugin (else compressed, decoded here)
 
   // The camera's size for the callbacks' check, set before calibrated_.
   int camera_width_ = 0, camera_height_ = 0;
-  std::atomic<bool> calibrated_{false};  // system_ exists and the SLAM thread runs
+  std::atomic<bool> calibrated_{false};  // session_ exists and the SLAM thread runs
+  bool started_ = false;                 // onInit completed (else nothing is saved at unload)
+  // [image thread] The camera taken from camera_info, and whether a later one differed.
+  vitamin_e::camera::Camera info_camera_;
+  bool info_change_warned_ = false;
 
   // Reconfigure writes, the SLAM thread copies per frame (never held while processing).
   std::mutex options_mutex_;
@@ -182,45 +185,31 @@ class TrackingNodelet : public nodelet::Nodelet {
 
   // [SLAM] state: the SLAM thread's alone once it runs (the destructor's after the join).
   vitamin_e::TrackingConfig options_;  // dyn_ as of the current frame
-  vitamin_e::pipeline::SystemConfig system_config_;
-  vitamin_e::camera::Camera camera_;
-  std::unique_ptr<vitamin_e::pipeline::System> system_;
-  bool have_last_stamp_ = false;
-  ros::Time last_stamp_;
+  std::unique_ptr<vitamin_e::pipeline::Session> session_;
   ros::Time last_map_points_;
   std::string frame_id_;  // camera frame in use
   nav_msgs::Path path_;
   std::map<std::uint64_t, std::deque<cv::Point2f>> track_history_;
-  std::string segment_note_ = "start";
-  unsigned segment_ = 1;
   // The mesher's input (~frame): every result goes through it, for the map's scale corrections.
   vitamin_e::pipeline::DenseInput dense_input_;
-  unsigned dense_input_segment_ = 1;
-  std::size_t finished_processed_ = 0, finished_tracked_ = 0;
-  int finished_retries_ = 0, finished_relocalizations_ = 0;
-  // The map frame of the current segment: T_map_w once the first pose exists.
+  unsigned dense_input_map_ = 1;
+  bool previous_pose_valid_ = false;  // the frame before had a pose (the odometry's step exists)
+  // The map frame of the session's current map: T_map_w once its first pose exists.
   bool have_map_ = false;
   Eigen::Isometry3d T_map_w_ = Eigen::Isometry3d::Identity();
   std::string map_description_;
   bool have_T_c_base_ = false;
   Eigen::Isometry3d T_c_base_ = Eigen::Isometry3d::Identity();
   bool body_tf_sent_ = false;
+  // The camera -> IMU rotation check: the last pose it saw, what it gathered, done once said.
+  bool have_rotation_pose_ = false;
+  double rotation_pose_t_ = 0.0;
+  Eigen::Matrix3d rotation_pose_R_ = Eigen::Matrix3d::Identity();
+  RotationAgreement rotation_agreement_;
+  bool rotation_checked_ = false;
 
-  // What ~save_trajectory reads: the finished segments (map frame) and the current one's
-  // poses in the core's world with its T_map_w. The SLAM thread appends per frame.
-  struct TrajectorySnapshot {
-    std::vector<TrajectorySegment> finished;
-    std::vector<vitamin_e::pipeline::TrajectoryEntry> current;
-    Eigen::Isometry3d T_map_w = Eigen::Isometry3d::Identity();
-    std::string note;
-  };
-  std::mutex snapshot_mutex_;
-  TrajectorySnapshot snapshot_;
-
-  std::mutex imu_mutex_;  // the accelerometer window (IMU callbacks run beside the SLAM)
-  GravityWindow gravity_;
-  std::string imu_frame_;
-  std::size_t imu_samples_ = 0;
+  TrajectorySnapshot snapshot_;  // ~save_trajectory's copy (own mutex)
+  ImuBuffer imu_;                // ~imu_topic's samples (own mutex)
 
   std::mutex stats_mutex_;
   Stats stats_;

@@ -15,6 +15,7 @@
 #include "tracking_nodelet.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TrackingStatus.h"
+#include "vitamin_e/pipeline/step_covariance.h"
 #include "vitamin_e/ros/conversions.h"
 #include "vitamin_e/ros/dense_frame_msg.h"
 
@@ -37,14 +38,15 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
   status->num_tracked = static_cast<uint32_t>(result.num_tracked);
   status->num_mapped = static_cast<uint32_t>(result.num_mapped);
   status->map_size = static_cast<uint32_t>(result.map_size);
-  status->init_retries = finished_retries_ + result.init_retries;
-  status->relocalizations = finished_relocalizations_ + result.relocalizations;
+  status->init_retries = session_->initRetries();
+  status->relocalizations = session_->relocalizations();
   status->ms_per_frame = static_cast<float>(ms);
-  status->frames_processed = finished_processed_ + system_->framesProcessed();
-  status->frames_tracked = finished_tracked_ + system_->framesTracked();
-  status->segment = segment_;
+  status->frames_processed = session_->framesProcessed();
+  status->frames_tracked = session_->framesTracked();
+  status->segment = session_->segment();
+  status->map = session_->map();
   status->message = result.message;
-  if (system_->mapLoaded()) {  // a map from ~load_map: say whether the camera is in it
+  if (session_->system().mapLoaded()) {  // a map from ~load_map: say whether the camera is in it
     const std::string where = result.pose_valid ? "localizing in loaded map" : "lost in loaded map";
     status->message = result.message.empty() ? where : where + ": " + result.message;
   }
@@ -59,7 +61,7 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
     stats_.tracked = result.num_tracked;
     stats_.mapped = result.num_mapped;
     stats_.map_size = result.map_size;
-    stats_.init_retries = finished_retries_ + result.init_retries;
+    stats_.init_retries = session_->initRetries();
     if (result.pose_valid) stats_.latency_s.push_back((ros::Time::now() - header.stamp).toSec());
     while (stats_.latency_s.size() > 200) stats_.latency_s.pop_front();
     while (stats_.processed_wall.size() > 2000) stats_.processed_wall.pop_front();
@@ -67,9 +69,9 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
 
   // Every result goes through the mesher's input, which adds up the map's scale corrections; the
   // points only when the mesher listens.
-  if (dense_input_segment_ != segment_) {
+  if (dense_input_map_ != session_->map()) {
     dense_input_.reset();  // a new map
-    dense_input_segment_ = segment_;
+    dense_input_map_ = session_->map();
   }
   const bool to_mesher = frame_pub_.getNumSubscribers() > 0;
   const vitamin_e::fusion::DenseFrame dense = dense_input_.next(result, to_mesher && result.pose_valid);
@@ -97,18 +99,19 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
   const geometry_msgs::Pose pose = toPoseMsg(result.T_w_c);
   geometry_msgs::PoseStampedPtr stamped(new geometry_msgs::PoseStamped);
   stamped->header.stamp = header.stamp;
-  stamped->header.frame_id = map_frame_;
+  stamped->header.frame_id = params_.map_frame;
   stamped->pose = pose;
   pose_pub_.publish(stamped);
 
   // Odometry of ~base_frame when set (the camera's mounting from tf or the calibration), else
-  // of the camera. Covariance in ROS's convention (map-frame position, rotation about the map
-  // axes), from the per-frame BA; without one (the initialization frame) a large diagonal, not
-  // the zeros an EKF would read as certainty.
+  // of the camera. Covariance: of the step from the previous frame (pipeline::stepCovariance),
+  // in ROS's convention (map-frame position, rotation about the map axes); without one (the
+  // initialization frame, a relocalized one) a large diagonal, not the zeros an EKF would read
+  // as certainty.
   Eigen::Isometry3d T_map_child = result.T_w_c;
   std::string child = frame_id_;
   Eigen::Vector3d lever = Eigen::Vector3d::Zero();
-  if (!base_frame_.empty()) {
+  if (!params_.base_frame.empty()) {
     Eigen::Isometry3d T_c_base;
     std::string why;
     if (!cameraToBase(&T_c_base, &why)) {
@@ -117,7 +120,7 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
       return;
     }
     T_map_child = result.T_w_c * T_c_base;
-    child = base_frame_;
+    child = params_.base_frame;
     lever = result.T_w_c.linear() * T_c_base.translation();
   }
   nav_msgs::OdometryPtr odom(new nav_msgs::Odometry);
@@ -125,8 +128,9 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
   odom->child_frame_id = child;
   odom->pose.pose = toPoseMsg(T_map_child);
   Matrix6d cov = Matrix6d::Identity() * 1e3;
-  if (result.T_w_c_covariance_valid && result.T_w_c_covariance.allFinite()) {
-    cov = covarianceMovedTo(covarianceInParent(result.T_w_c_covariance, result.T_w_c.linear()), lever);
+  Matrix6d step;
+  if (previous_pose_valid_ && vitamin_e::pipeline::stepCovariance(result, &step)) {
+    cov = covarianceMovedTo(covarianceInParent(step, result.T_w_c.linear()), lever);
   }
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 6; ++c) odom->pose.covariance[6 * r + c] = cov(r, c);
@@ -147,15 +151,17 @@ void TrackingNodelet::publishPath(const geometry_msgs::PoseStampedConstPtr& stam
 void TrackingNodelet::publishTf(const Eigen::Isometry3d& T_map_c, const ros::Time& stamp) {
   geometry_msgs::TransformStamped tf;
   tf.header.stamp = stamp;
-  tf.header.frame_id = map_frame_;
-  if (!odom_frame_.empty() && !base_frame_.empty() && tf_buffer_) {
+  tf.header.frame_id = params_.map_frame;
+  const std::string& odom_frame = params_.odom_frame;
+  const std::string& base_frame = params_.base_frame;
+  if (!odom_frame.empty() && !base_frame.empty() && tf_buffer_) {
     // REP-105: map -> odom = T_map_cam * T_cam_odom, with cam -> base -> odom from tf.
     geometry_msgs::TransformStamped cam_odom;
     try {
-      cam_odom = tf_buffer_->lookupTransform(frame_id_, odom_frame_, stamp, ros::Duration(0.05));
+      cam_odom = tf_buffer_->lookupTransform(frame_id_, odom_frame, stamp, ros::Duration(0.05));
     } catch (const tf2::TransformException& e) {
-      NODELET_WARN_THROTTLE(5.0, "no %s -> %s at %.3f (%s): map -> %s not published", odom_frame_.c_str(),
-                            frame_id_.c_str(), stamp.toSec(), e.what(), odom_frame_.c_str());
+      NODELET_WARN_THROTTLE(5.0, "no %s -> %s at %.3f (%s): map -> %s not published", odom_frame.c_str(),
+                            frame_id_.c_str(), stamp.toSec(), e.what(), odom_frame.c_str());
       return;
     }
     const Eigen::Isometry3d T_map_odom = T_map_c * fromTransformMsg(cam_odom.transform);
@@ -163,18 +169,18 @@ void TrackingNodelet::publishTf(const Eigen::Isometry3d& T_map_c, const ros::Tim
       NODELET_ERROR_THROTTLE(2.0, "non-finite map -> odom not published");
       return;
     }
-    tf.child_frame_id = odom_frame_;
+    tf.child_frame_id = odom_frame;
     tf.transform = toTransformMsg(T_map_odom);
-  } else if (!base_frame_.empty()) {
+  } else if (!base_frame.empty()) {
     // The camera hangs under the base (its mounting is static): map -> base, so that the
     // camera frame keeps one parent.
     Eigen::Isometry3d T_c_base;
     std::string why;
     if (!cameraToBase(&T_c_base, &why)) {
-      NODELET_WARN_THROTTLE(5.0, "map -> %s not published: %s", base_frame_.c_str(), why.c_str());
+      NODELET_WARN_THROTTLE(5.0, "map -> %s not published: %s", base_frame.c_str(), why.c_str());
       return;
     }
-    tf.child_frame_id = base_frame_;
+    tf.child_frame_id = base_frame;
     tf.transform = toTransformMsg(T_map_c * T_c_base);
   } else {
     tf.child_frame_id = frame_id_;
@@ -203,22 +209,23 @@ void TrackingNodelet::publishPoints(const FrameResult& result, const std_msgs::H
   if (skipped > 0) NODELET_ERROR_THROTTLE(2.0, "%zu non-finite points not published", skipped);
   sensor_msgs::PointCloud2Ptr cloud(new sensor_msgs::PointCloud2);
   std_msgs::Header h = header;
-  h.frame_id = map_frame_;
+  h.frame_id = params_.map_frame;
   fillCloud(h, points, intensity, cloud.get());
   points_pub_.publish(cloud);
 }
 
 void TrackingNodelet::publishFrame(const vitamin_e::fusion::DenseFrame& dense, const std_msgs::Header& header) {
   vitamin_e::TrackedFramePtr frame(new vitamin_e::TrackedFrame);
-  toTrackedFrameMsg(dense, system_->camera(), frame.get());
+  toTrackedFrameMsg(dense, session_->system().camera(), frame.get());
   frame->header.stamp = header.stamp;
-  frame->header.frame_id = map_frame_;
-  frame->segment = segment_;
+  frame->header.frame_id = params_.map_frame;
+  // The map's number: the mesher starts a new TSDF with a new map, not at a time jump in the same one.
+  frame->segment = session_->map();
   frame_pub_.publish(vitamin_e::TrackedFrameConstPtr(frame));  // zero copy inside one manager
 }
 
 void TrackingNodelet::publishMapPoints(const ros::Time& stamp) {
-  const auto map = system_->mapPoints();
+  const auto map = session_->system().mapPoints();
   std::vector<Eigen::Vector3f> points;
   std::vector<std::uint8_t> intensity;
   points.reserve(map.size());
@@ -234,7 +241,7 @@ void TrackingNodelet::publishMapPoints(const ros::Time& stamp) {
   sensor_msgs::PointCloud2Ptr cloud(new sensor_msgs::PointCloud2);
   std_msgs::Header h;
   h.stamp = stamp;
-  h.frame_id = map_frame_;
+  h.frame_id = params_.map_frame;
   fillCloud(h, points, intensity, cloud.get());
   map_points_pub_.publish(cloud);
 }

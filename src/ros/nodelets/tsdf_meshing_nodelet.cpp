@@ -183,8 +183,8 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
       markers_.setOptions(markerOptions());
     }
     if (dense_ && msg->segment != segment_) {
-      // The tracker restarted (~reset, a stamp jumping back): a new map, so a new volume.
-      NODELET_INFO("tracking segment %u: a new map, the TSDF starts over (%zu frames fused before)", msg->segment,
+      // The tracker started a new map (~reset, a time jump with nothing to relocalize in): a new volume.
+      NODELET_INFO("tracking map %u: a new map, the TSDF starts over (%zu frames fused before)", msg->segment,
                    frames_integrated_);
       dense_.reset();
       frames_integrated_ = 0;
@@ -321,7 +321,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   meshing::PinholeImage dense_image_;
   std::size_t frames_integrated_ = 0;
   MeshBlockMarkers markers_;  // the blocks published so far
-  unsigned segment_ = 0;      // the tracker's segment of the frames fused
+  unsigned segment_ = 0;      // the tracker's map (TrackedFrame::segment) of the frames fused
   ros::Subscriber frame_sub_;
   ros::Publisher mesh_pub_;
   ros::ServiceServer save_srv_, save_tsdf_srv_, republish_srv_;

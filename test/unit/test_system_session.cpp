@@ -1,0 +1,186 @@
+// pipeline::Session: the stream's stamps jump back (a bag replayed: its second half
+// again) and the camera is relocalized in the same map, so the replayed frames get
+// the poses of the first pass (same world frame and scale); ~reset-like restarts give
+// a new map; small steps back are dropped; the segments file reads back.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+
+#include "vitamin_e/pipeline/session.h"
+#include "vitamin_e/synth/camera_path.h"
+#include "vitamin_e/synth/renderer.h"
+#include "vitamin_e/synth/scene.h"
+#include "vitamin_e/synth/sequence.h"
+
+namespace ve = vitamin_e;
+namespace pl = vitamin_e::pipeline;
+
+namespace {
+
+struct Frames {
+  ve::camera::Camera camera;
+  std::vector<cv::Mat> images;
+  std::vector<double> stamps;
+};
+
+const Frames& frames() {
+  static const Frames f = [] {
+    ve::synth::SequenceConfig seq;
+    seq.frames = 80;
+    seq.seed = 5;
+    seq.width = 376;
+    seq.height = 240;
+    Frames out;
+    out.camera = ve::synth::makeSequenceCamera(seq.width, seq.height, true);
+    const ve::synth::CameraPath path(ve::synth::makeSequencePath(seq));
+    const ve::synth::Scene scene = ve::synth::makeSequenceScene(seq, path);
+    const ve::synth::Renderer renderer(scene, out.camera);
+    for (int i = 0; i < seq.frames; ++i) {
+      ve::synth::RenderOptions options;
+      options.noise_sigma = seq.noise_sigma;
+      options.noise_seed = 500 + static_cast<std::uint64_t>(i);
+      out.images.push_back(renderer.render(path.T_w_c(i / seq.rate_hz), options));
+      out.stamps.push_back(static_cast<double>(ve::synth::frameTimestampNs(seq, i)) * 1e-9);
+    }
+    return out;
+  }();
+  return f;
+}
+
+std::map<double, Eigen::Isometry3d> byStamp(const pl::TrajectorySegment& s) {
+  std::map<double, Eigen::Isometry3d> out;
+  for (const auto& e : s.poses) out[e.timestamp] = e.T_w_c;
+  return out;
+}
+
+}  // namespace
+
+// The second half of the sequence again, with its own stamps (2 s back): a new segment in
+// map 1, relocalized, and its poses where the first pass put the same frames.
+TEST(SystemSession, TimeJumpRelocalizesInTheSameMap) {
+  const Frames& f = frames();
+  pl::Session session(pl::SystemConfig{}, f.camera);
+  for (std::size_t i = 0; i < f.images.size(); ++i) {
+    const pl::SessionFrame r = session.process(f.images[i], f.stamps[i]);
+    ASSERT_TRUE(r.processed) << i;
+    EXPECT_FALSE(r.time_jump);
+  }
+  const std::size_t half = f.images.size() / 2;
+  std::size_t tracked_second = 0;
+  for (std::size_t i = half; i < f.images.size(); ++i) {
+    const pl::SessionFrame r = session.process(f.images[i], f.stamps[i]);
+    ASSERT_TRUE(r.processed) << i << ": " << r.dropped_why;
+    EXPECT_EQ(r.time_jump, i == half);
+    if (i == half) {
+      EXPECT_NEAR(r.jump_back_s, f.stamps.back() - f.stamps[half], 1e-6);
+    }
+    tracked_second += r.result.pose_valid ? 1 : 0;
+  }
+  EXPECT_EQ(session.segment(), 2u);
+  EXPECT_EQ(session.map(), 1u) << "a time jump must keep the map";
+  EXPECT_EQ(session.timeJumps(), 1u);
+  EXPECT_GE(session.relocalizations(), 1);
+  EXPECT_EQ(session.initRetries(), 0);
+  EXPECT_GE(tracked_second, half - 3) << "the replayed frames were not tracked";
+  const auto segments = session.segments();
+  ASSERT_EQ(segments.size(), 2u);
+  EXPECT_EQ(segments[1].map, 1u);
+  EXPECT_NE(segments[1].note.find("time jump"), std::string::npos) << segments[1].note;
+  // The same frames, the same poses: the replay is in the first pass's world and scale.
+  const auto first = byStamp(segments[0]);
+  double path_length = 0.0, worst = 0.0;
+  for (std::size_t k = 1; k < segments[0].poses.size(); ++k) {
+    path_length += (segments[0].poses[k].T_w_c.translation() - segments[0].poses[k - 1].T_w_c.translation()).norm();
+  }
+  std::vector<double> differences;
+  for (const auto& e : segments[1].poses) {
+    auto it = first.find(e.timestamp);
+    if (it == first.end()) continue;
+    differences.push_back((it->second.translation() - e.T_w_c.translation()).norm());
+    worst = std::max(worst, differences.back());
+  }
+  std::sort(differences.begin(), differences.end());
+  const double median = differences.empty() ? 1e9 : differences[differences.size() / 2];
+  std::printf("replay vs first pass: %zu frames, position difference median %.5f, worst %.5f (path %.3f map units)\n",
+              differences.size(), median, worst, path_length);
+  EXPECT_GE(differences.size(), half - 3);
+  // A new map would put the replay's first camera at the origin: off by about half the path.
+  EXPECT_LT(median, 0.02 * path_length);
+  EXPECT_LT(worst, 0.05 * path_length);
+}
+
+TEST(SystemSession, SmallStepBackDroppedResetStartsANewMap) {
+  const Frames& f = frames();
+  pl::SessionConfig sc;
+  sc.time_jump_threshold_s = 1.0;
+  pl::Session session(pl::SystemConfig{}, f.camera, sc);
+  for (std::size_t i = 0; i < 30; ++i) ASSERT_TRUE(session.process(f.images[i], f.stamps[i]).processed);
+  // 0.5 s back: out of order, dropped.
+  const pl::SessionFrame back = session.process(f.images[20], f.stamps[20]);
+  EXPECT_FALSE(back.processed);
+  EXPECT_NE(back.dropped_why.find("does not increase"), std::string::npos) << back.dropped_why;
+  EXPECT_EQ(session.framesDropped(), 1u);
+  EXPECT_EQ(session.segment(), 1u);
+  const std::size_t tracked = session.framesTracked();
+  session.reset("~reset");
+  EXPECT_EQ(session.segment(), 2u);
+  EXPECT_EQ(session.map(), 2u);
+  EXPECT_EQ(session.framesTracked(), tracked) << "counts go on over maps";
+  // After a reset any stamp is accepted (a new map, a new stamp order).
+  EXPECT_TRUE(session.process(f.images[0], f.stamps[0]).processed);
+  const auto segments = session.segments();
+  ASSERT_GE(segments.size(), 1u);
+  EXPECT_EQ(segments[0].map, 1u);
+
+  // With the drop policy a jump is an out-of-order frame too.
+  sc.on_time_jump = pl::TimeJumpPolicy::kDrop;
+  pl::Session dropping(pl::SystemConfig{}, f.camera, sc);
+  for (std::size_t i = 40; i < 50; ++i) ASSERT_TRUE(dropping.process(f.images[i], f.stamps[i]).processed);
+  EXPECT_FALSE(dropping.process(f.images[0], f.stamps[0]).processed);
+  EXPECT_EQ(dropping.segment(), 1u);
+}
+
+// A jump before any map exists: nothing to relocalize in, a new map.
+TEST(SystemSession, TimeJumpWithoutAMapStartsANewOne) {
+  const Frames& f = frames();
+  pl::Session session(pl::SystemConfig{}, f.camera);
+  ASSERT_TRUE(session.process(f.images[50], f.stamps[50]).processed);
+  const pl::SessionFrame r = session.process(f.images[0], f.stamps[0]);
+  EXPECT_TRUE(r.processed);
+  EXPECT_TRUE(r.time_jump);
+  EXPECT_EQ(session.map(), 2u);
+}
+
+TEST(SystemSession, SegmentsFileReadsBack) {
+  std::vector<pl::TrajectorySegment> segments(2);
+  segments[0].number = 1;
+  segments[0].map = 1;
+  segments[0].note = "start";
+  segments[1].number = 3;
+  segments[1].map = 1;
+  segments[1].note = "time jump: stamp jumped back by 8.000 s";
+  for (int k = 0; k < 3; ++k) {
+    pl::TrajectoryEntry e;
+    e.timestamp = 10.0 + k;
+    e.T_w_c.translation() << k, 2.0 * k, -1.0;
+    segments[k % 2].poses.push_back(e);
+  }
+  const std::string path = ::testing::TempDir() + "/session_segments.txt";
+  std::string error;
+  ASSERT_TRUE(pl::saveSegmentsTum(segments, "T_map_c", path, &error)) << error;
+  const auto back = pl::readSegmentsTum(path);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[1].number, 3u);
+  EXPECT_EQ(back[1].map, 1u);
+  EXPECT_EQ(back[1].note, segments[1].note);
+  ASSERT_EQ(back[0].poses.size(), 2u);
+  EXPECT_NEAR(back[0].poses[1].T_w_c.translation().y(), 4.0, 1e-9);
+  EXPECT_FALSE(pl::saveSegmentsTum(segments, "T_map_c", "/nonexistent/dir/x.txt", &error));
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
