@@ -37,7 +37,9 @@ endforeach()
 install(FILES nodelet_plugins.xml DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
 foreach(dir launch config rviz)
   if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${dir})
-    install(DIRECTORY ${dir}/ DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION}/${dir})
+    # The real folder: its files are copied (the package folder's entry is a link, scripts/build.sh).
+    get_filename_component(_ve_dir_real ${CMAKE_CURRENT_SOURCE_DIR}/${dir} REALPATH)
+    install(DIRECTORY ${_ve_dir_real}/ DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION}/${dir})
   endif()
 endforeach()
 # Scripts the launch files run (rosrun / <node type>): installed, so that a launch file
@@ -45,3 +47,25 @@ endforeach()
 catkin_install_python(PROGRAMS scripts/play_bag.py scripts/make_bag.sh
   DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
 install(PROGRAMS scripts/screenshot_rviz.sh DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+
+# The workspace's package folder links each entry of the checkout (scripts/build.sh), and
+# install(FILES) copies a link as a link (package.xml, nodelet_plugins.xml): the install space
+# would point back into the checkout.
+# Declared after every install rule of the package (catkin_package's package.xml included),
+# so it runs last: each link in the package's installed share folder becomes a copy.
+install(CODE "
+  file(GLOB_RECURSE _ve_links LIST_DIRECTORIES true \"\$ENV{DESTDIR}\${CMAKE_INSTALL_PREFIX}/${CATKIN_PACKAGE_SHARE_DESTINATION}/*\")
+  foreach(_ve_link \${_ve_links})
+    if(IS_SYMLINK \"\${_ve_link}\")
+      get_filename_component(_ve_target \"\${_ve_link}\" REALPATH)
+      file(REMOVE \"\${_ve_link}\")
+      get_filename_component(_ve_parent \"\${_ve_link}\" DIRECTORY)
+      get_filename_component(_ve_name \"\${_ve_link}\" NAME)
+      file(COPY \"\${_ve_target}\" DESTINATION \"\${_ve_parent}\")
+      get_filename_component(_ve_target_name \"\${_ve_target}\" NAME)
+      if(NOT _ve_target_name STREQUAL _ve_name)
+        file(RENAME \"\${_ve_parent}/\${_ve_target_name}\" \"\${_ve_link}\")
+      endif()
+    endif()
+  endforeach()
+")
