@@ -243,6 +243,31 @@ TrackingParams readTrackingParams(const ParamLookup& lookup, ParamNotes* notes) 
   return p;
 }
 
+TrackingFiles loadTrackingFiles(const TrackingParams& params) {
+  TrackingFiles files;
+  try {
+    if (!params.config_file.empty()) files.system_config = vitamin_e::pipeline::loadSystemConfig(params.config_file);
+    files.system_config.validate();
+  } catch (const std::exception& e) {
+    throw TrackingParamError("~config_file '" + params.config_file + "': " + e.what());
+  }
+  if (!params.load_map.empty()) {
+    try {
+      files.map = std::make_unique<vitamin_e::map::MapFileContents>(vitamin_e::map::loadMapFile(params.load_map));
+    } catch (const std::exception& e) {
+      throw TrackingParamError(std::string("~load_map: ") + e.what());
+    }
+  }
+  if (!params.calibration_file.empty()) {
+    try {
+      files.calibration = vitamin_e::camera::loadCalibration(params.calibration_file);
+    } catch (const std::exception& e) {
+      throw TrackingParamError("~calibration_file '" + params.calibration_file + "': " + e.what());
+    }
+  }
+  return files;
+}
+
 std::string trackingParamsMarkdown() {
   TrackingParams defaults;
   std::ostringstream out;

@@ -1,6 +1,7 @@
 // The tracking nodelet's parameters (tracking_params.h) without a master: defaults, type
 // and value errors naming the parameter, the "no IMU" spellings a shell leaves of
-// imu_topic:="", old names, and docs/ROS.md's table being the one the code generates.
+// imu_topic:="", old names, docs/ROS.md's table being the one the code generates, and the
+// files the parameters name loaded before the nodelet starts (errors name the parameter).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -143,6 +144,51 @@ TEST(RosTrackingParams, DocIsCurrent) {
   // Spot checks of the generated rows.
   EXPECT_NE(in_doc.find("| `~imu_topic` |"), std::string::npos);
   EXPECT_NE(in_doc.find("| `~time_jump` | `relocalize` |"), std::string::npos);
+}
+
+namespace {
+std::string loadError(const TrackingParams& p) {
+  try {
+    loadTrackingFiles(p);
+  } catch (const TrackingParamError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(RosTrackingParams, FilesLoadedOrTheParameterNamed) {
+  const TrackingFiles none = loadTrackingFiles(TrackingParams{});
+  EXPECT_EQ(none.map, nullptr);
+  EXPECT_FALSE(none.calibration.has_value());
+  EXPECT_EQ(none.system_config.describe(), vitamin_e::pipeline::SystemConfig{}.describe());
+
+  TrackingParams p;
+  const std::filesystem::path source(VITAMIN_E_SOURCE_DIR);
+  p.config_file = (source / "config" / "euroc.yaml").string();
+  p.calibration_file = (source / "config" / "euroc_cam0.yaml").string();
+  const TrackingFiles files = loadTrackingFiles(p);
+  EXPECT_EQ(files.system_config.describe(), vitamin_e::pipeline::loadSystemConfig(p.config_file).describe());
+  ASSERT_TRUE(files.calibration.has_value());
+  EXPECT_TRUE(files.calibration->camera.valid());
+
+  TrackingParams missing;
+  missing.config_file = "/nonexistent/slam.yaml";
+  EXPECT_NE(loadError(missing).find("~config_file '/nonexistent/slam.yaml'"), std::string::npos) << loadError(missing);
+  missing = TrackingParams{};
+  missing.calibration_file = "/nonexistent/cam.yaml";
+  EXPECT_NE(loadError(missing).find("~calibration_file '/nonexistent/cam.yaml'"), std::string::npos)
+      << loadError(missing);
+
+  const std::filesystem::path damaged = std::filesystem::temp_directory_path() / "vitamin_e_damaged_map.vemap";
+  {
+    std::ofstream out(damaged);
+    out << "not a map\n";
+  }
+  TrackingParams bad_map;
+  bad_map.load_map = damaged.string();
+  EXPECT_NE(loadError(bad_map).find("~load_map: "), std::string::npos) << loadError(bad_map);
+  std::filesystem::remove(damaged);
 }
 
 int main(int argc, char** argv) {

@@ -6,13 +6,18 @@
 // ones (publishing, localization only) in cfg/Tracking.cfg (dynamic_reconfigure).
 // No master needed: the lookup is a function (the nodelet passes its NodeHandle's).
 #include <functional>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include "vitamin_e/camera/camera.h"
+#include "vitamin_e/map/map_file.h"
 #include "vitamin_e/pipeline/session.h"
+#include "vitamin_e/pipeline/system_config.h"
 
 namespace vitamin_e_ros {
 
@@ -70,6 +75,17 @@ struct ParamNotes {
 // Throws TrackingParamError naming the first bad one. "", '' and none for ~imu_topic
 // (what a shell leaves of imu_topic:="") mean no IMU.
 TrackingParams readTrackingParams(const ParamLookup& lookup, ParamNotes* notes = nullptr);
+
+// What the parameters' files hold, loaded and checked before the nodelet starts anything.
+struct TrackingFiles {
+  vitamin_e::pipeline::SystemConfig system_config;                  // ~config_file, else the defaults; validated
+  std::unique_ptr<vitamin_e::map::MapFileContents> map;             // ~load_map; null: none
+  std::optional<vitamin_e::camera::CameraCalibration> calibration;  // ~calibration_file; none: from camera_info
+};
+
+// Loads ~config_file, ~load_map and ~calibration_file. Throws TrackingParamError naming the
+// parameter, the file and what is wrong with it.
+TrackingFiles loadTrackingFiles(const TrackingParams& params);
 
 // The parameter table of docs/ROS.md (markdown, one row per parameter, in table order).
 std::string trackingParamsMarkdown();

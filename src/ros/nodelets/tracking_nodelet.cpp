@@ -58,22 +58,17 @@ void TrackingNodelet::onInit() {
   // the subscriber's queue, ~queue_size).
   queue_ = std::make_unique<SlamQueue<QueuedFrame>>(params_.process_all_frames ? kBagQueueFrames : 1,
                                                     !params_.process_all_frames);
+  TrackingFiles files;
   try {
-    if (!params_.config_file.empty()) system_config_ = vitamin_e::pipeline::loadSystemConfig(params_.config_file);
-    system_config_.validate();
+    files = loadTrackingFiles(params_);
   } catch (const std::exception& e) {
-    throw fail("~config_file '" + params_.config_file + "': " + e.what() +
-               " (the nodelet does not start: fix the config and restart)");
+    throw fail(std::string(e.what()) + " (the nodelet does not start: fix the file or the parameter and restart)");
   }
+  system_config_ = files.system_config;
+  loaded_map_ = std::move(files.map);
   NODELET_INFO("SLAM config %s:\n%s", params_.config_file.empty() ? "(defaults)" : params_.config_file.c_str(),
                system_config_.describe().c_str());
-  if (!params_.load_map.empty()) {
-    try {
-      loaded_map_ = std::make_unique<vitamin_e::map::MapFileContents>(vitamin_e::map::loadMapFile(params_.load_map));
-    } catch (const std::exception& e) {
-      throw fail(std::string("~load_map: ") + e.what() +
-                 " (the nodelet does not start: fix the file or the parameter and restart)");
-    }
+  if (loaded_map_) {
     NODELET_INFO("~load_map %s: %s", params_.load_map.c_str(), vitamin_e::map::mapFileHeader(*loaded_map_).c_str());
   }
 
@@ -88,20 +83,14 @@ void TrackingNodelet::onInit() {
   checkTransport(pnh);
   const std::string image_topic = nh.resolveName("image");
   rectified_ = params_.rectified == "true" || (params_.rectified == "auto" && isRectifiedTopic(image_topic));
-  if (!params_.calibration_file.empty()) {
-    vitamin_e::camera::CameraCalibration calibration;
-    try {
-      calibration = vitamin_e::camera::loadCalibration(params_.calibration_file);
-    } catch (const std::exception& e) {
-      throw fail("~calibration_file '" + params_.calibration_file + "': " + e.what());
-    }
-    T_b_c_ = calibration.T_b_c;
+  if (files.calibration) {
+    T_b_c_ = files.calibration->T_b_c;
     if (rectified_) {
       NODELET_WARN("%s looks rectified, but ~calibration_file describes the camera with its distortion: "
                    "set ~rectified false if the file is the rectified camera's",
                    image_topic.c_str());
     }
-    makeSession(calibration.camera);
+    makeSession(files.calibration->camera);
   } else {
     NODELET_INFO("no ~calibration_file: waiting for %s (%s)", nh.resolveName("camera_info").c_str(),
                  rectified_ ? "rectified image: P, no distortion" : "raw image: K and D");
