@@ -8,6 +8,7 @@
 #include <random>
 
 #include "mesh_checks.h"
+#include "sphere_views.h"
 #include "vitamin_e/fusion/tsdf_integrator.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
 #include "vitamin_e/meshing/frame_mesher.h"
@@ -19,48 +20,10 @@ using meshing::PinholeImage;
 
 namespace {
 
-PinholeImage smallImage() { return {{200.0, 200.0, 159.5, 119.5}, 320, 240}; }
-
-// Camera at `eye` looking at `target` (optical frame: z forward, y down-ish).
-Isometry3d lookAt(const Vector3d& eye, const Vector3d& target) {
-  const Vector3d z = (target - eye).normalized();
-  Vector3d up = std::abs(z.z()) > 0.9 ? Vector3d::UnitX() : Vector3d::UnitZ();
-  const Vector3d x = z.cross(up).normalized();  // right
-  const Vector3d y = z.cross(x);                // down
-  Isometry3d T = Isometry3d::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = y;
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
-}
-
-// Depth map (z) of a sphere (centre c, radius r, world) seen from T_w_c.
-std::vector<float> sphereDepth(const Vector3d& c, double r, const Isometry3d& T_w_c, const PinholeImage& image) {
-  std::vector<float> depth(static_cast<std::size_t>(image.width) * image.height, 0.0f);
-  const Vector3d c_c = T_w_c.inverse() * c;
-  for (int v = 0; v < image.height; ++v)
-    for (int u = 0; u < image.width; ++u) {
-      const Vector3d ray = image.K.ray(Eigen::Vector2d(u, v));  // z = 1
-      const double a = ray.squaredNorm(), b = -2.0 * ray.dot(c_c), cc = c_c.squaredNorm() - r * r;
-      const double disc = b * b - 4 * a * cc;
-      if (disc < 0) continue;
-      const double t = (-b - std::sqrt(disc)) / (2 * a);
-      if (t > 0) depth[static_cast<std::size_t>(v) * image.width + u] = static_cast<float>(t);
-    }
-  return depth;
-}
-
-std::vector<Isometry3d> viewsAround(const Vector3d& c, double dist) {
-  std::vector<Isometry3d> views;
-  for (int sx = -1; sx <= 1; ++sx)
-    for (int sy = -1; sy <= 1; ++sy)
-      for (int sz = -1; sz <= 1; ++sz) {
-        if (sx == 0 && sy == 0 && sz == 0) continue;
-        views.push_back(lookAt(c + dist * Vector3d(sx, sy, sz).normalized(), c));
-      }
-  return views;  // 26 directions
-}
+using test::lookAt;
+using test::sphereDepth;
+using test::viewsAround;
+PinholeImage smallImage() { return test::sphereTestImage(); }
 
 // Frame mesh of the plane z = 0 (world) seen from T_w_c: jittered grid of points.
 meshing::FrameMesh planeMesh(const Isometry3d& T_w_c, const PinholeImage& image, unsigned seed) {

@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 
+#include "sphere_views.h"
 #include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
 
@@ -22,36 +23,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-meshing::PinholeImage smallImage() { return {{200.0, 200.0, 159.5, 119.5}, 320, 240}; }
-
-// Camera at eye looking at the origin.
-Isometry3d lookAtOrigin(const Vector3d& eye) {
-  const Vector3d z = (-eye).normalized();
-  const Vector3d up = std::abs(z.z()) > 0.9 ? Vector3d::UnitX() : Vector3d::UnitZ();
-  const Vector3d x = z.cross(up).normalized();
-  Isometry3d T = Isometry3d::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = z.cross(x);
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
-}
-
-// Depth of a sphere of radius r at the origin seen from T_w_c.
+meshing::PinholeImage smallImage() { return test::sphereTestImage(); }
+Isometry3d lookAtOrigin(const Vector3d& eye) { return test::lookAt(eye, Vector3d::Zero()); }
 std::vector<float> sphereDepth(double r, const Isometry3d& T_w_c, const meshing::PinholeImage& image) {
-  std::vector<float> depth(static_cast<std::size_t>(image.width) * image.height, 0.0f);
-  const Vector3d c_c = T_w_c.inverse() * Vector3d::Zero();
-  for (int v = 0; v < image.height; ++v) {
-    for (int u = 0; u < image.width; ++u) {
-      const Vector3d ray = image.K.ray(Eigen::Vector2d(u, v));
-      const double a = ray.squaredNorm(), b = -2.0 * ray.dot(c_c), cc = c_c.squaredNorm() - r * r;
-      const double disc = b * b - 4 * a * cc;
-      if (disc < 0) continue;
-      const double t = (-b - std::sqrt(disc)) / (2 * a);
-      if (t > 0) depth[static_cast<std::size_t>(v) * image.width + u] = static_cast<float>(t);
-    }
-  }
-  return depth;
+  return test::sphereDepth(Vector3d::Zero(), r, T_w_c, image);
 }
 
 fusion::TsdfConfig config() {
