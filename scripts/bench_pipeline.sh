@@ -8,6 +8,8 @@
 #   .ws/devel/lib/vitamin_e; docs/PERFORMANCE.md shows how to build one beside this checkout).
 # Defaults: V1_01_easy_30s under VE_RENDERS (../renders) with config/euroc.yaml, KITTI 07 frames
 # 0-159 under VE_SHARED (../shared) with config/kitti.yaml; 2 runs; all frames.
+# --config-dir DIR: euroc.yaml and kitti.yaml from DIR for both builds (an older build that lacks
+#   today's defaults runs the configs of its own commit: `git show REV:config/euroc.yaml > DIR/euroc.yaml`).
 # Per build, dataset and mode (medians over the runs):
 #   fps        processed frames / the runner's wall time for them (stats.json wall_time_s)
 #   rt         real-time factor: fps x the camera's frame interval (median of the trajectory's steps)
@@ -19,16 +21,16 @@
 # Last line: JSON with every number. Timing only: accuracy is scripts/evaluate_suite.sh's.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-usage="usage: ./scripts/bench_pipeline.sh [--base DIR] [--runs N] [--frames N] [--stride N] [--out DIR] [--render PATH] [--kitti PATH] [--only render|kitti] [--modes LIST]"
+usage="usage: ./scripts/bench_pipeline.sh [--base DIR] [--runs N] [--frames N] [--stride N] [--out DIR] [--render PATH] [--kitti PATH] [--only render|kitti] [--modes LIST] [--config-dir DIR]"
 if ve_wants_help "$@"; then sed -n '2,21p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0; fi
 
-base="" runs=2 frames=0 stride=1 only="" modes="sequential pipelined"
+base="" runs=2 frames=0 stride=1 only="" modes="sequential pipelined" config_dir="$VE_ROOT/config"
 out="$(mktemp -d /tmp/ve_bench_pipeline.XXXXXX)"
 render="$(ve_list_path ../renders/V1_01_easy_30s)"
 kitti="$(ve_list_path ../shared/data/kitti/07_first160)"
 while [ $# -gt 0 ]; do
   case "$1" in
-    --base|--runs|--frames|--stride|--out|--render|--kitti|--only|--modes)
+    --base|--runs|--frames|--stride|--out|--render|--kitti|--only|--modes|--config-dir)
       [ $# -ge 2 ] || ve_die "$1 needs a value ($usage)" ;;&
     --base) base="$2"; shift 2 ;;
     --runs) runs="$2"; shift 2 ;;
@@ -39,12 +41,14 @@ while [ $# -gt 0 ]; do
     --kitti) kitti="$2"; shift 2 ;;
     --only) only="$2"; shift 2 ;;
     --modes) modes="$2"; shift 2 ;;
+    --config-dir) config_dir="$2"; shift 2 ;;
     *) ve_die "unknown option '$1' ($usage)" ;;
   esac
 done
 [[ "$runs" =~ ^[1-9][0-9]*$ ]] || ve_die "--runs must be a positive integer, got '$runs'"
 [[ "$frames" =~ ^[0-9]+$ ]] || ve_die "--frames must be a non-negative integer, got '$frames'"
 [[ "$stride" =~ ^[1-9][0-9]*$ ]] || ve_die "--stride must be a positive integer, got '$stride'"
+for c in euroc kitti; do [ -f "$config_dir/$c.yaml" ] || ve_die "--config-dir: $config_dir/$c.yaml is missing"; done
 case "$only" in ""|render|kitti) ;; *) ve_die "--only takes render or kitti, got '$only'" ;; esac
 for m in $modes; do
   case "$m" in sequential|pipelined) ;; *) ve_die "--modes: unknown mode '$m' (sequential, pipelined)" ;; esac
@@ -64,11 +68,11 @@ fi
 sets=()
 if [ "$only" != kitti ]; then
   [ -d "$render" ] || ve_die "render '$render' does not exist (--render PATH, or --only kitti)"
-  sets+=("render|$render|$VE_ROOT/config/euroc.yaml")
+  sets+=("render|$render|$config_dir/euroc.yaml")
 fi
 if [ "$only" != render ]; then
   [ -d "$kitti" ] || ve_die "KITTI clip '$kitti' does not exist (--kitti PATH, or --only render)"
-  sets+=("kitti|$kitti|$VE_ROOT/config/kitti.yaml")
+  sets+=("kitti|$kitti|$config_dir/kitti.yaml")
 fi
 mkdir -p "$out"
 extra=(--stride "$stride")
