@@ -2,7 +2,7 @@
 # Do two builds give the same trajectories? Runs vitamin_e_run of both (sequential mode, which is
 # deterministic) on the regression set and compares the md5 of their trajectory.txt: a refactoring
 # must keep every one; a change of behaviour says which it changes.
-#   ./scripts/regression_md5.sh BASE_BIN_DIR NEW_BIN_DIR [--only NAME]... [--work DIR] [--keep]
+#   ./scripts/regression_md5.sh BASE_BIN_DIR NEW_BIN_DIR [--only NAME]... [--work DIR] [--keep] [--base-configs DIR]
 # BIN_DIR: a folder with vitamin_e_run (e.g. .ws/devel/lib/vitamin_e, or a copy of it made before
 # the change). The set: the real KITTI clips 06_first51, 07_first160, 02_first300 (config/kitti.yaml,
 # under VE_SHARED, default ../shared), the synthetic room (config/euroc.yaml) and the street turn
@@ -14,22 +14,26 @@
 # a binary is run once per case;
 # runs go to WORK/runs (deleted unless --keep). Prints one line per case and exits 1 when a
 # trajectory differs.
+# --base-configs DIR: BASE runs the configs in DIR (e.g. its own commit's: `git show
+#   REV:config/kitti.yaml > DIR/kitti.yaml`, the same for euroc.yaml), NEW the checkout's.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-usage() { sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; }
 ve_wants_help "$@" && { usage; exit 0; }
 [ $# -ge 2 ] || { usage >&2; exit 2; }
 base_bin="$(cd "$1" && pwd)" new_bin="$(cd "$2" && pwd)"
 shift 2
 work=/tmp/vitamin_e_regression
 keep=0
+base_configs="$VE_ROOT/config"
 only=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --only) shift; only+=("$1") ;;
     --work) shift; work="$1" ;;
     --keep) keep=1 ;;
+    --base-configs) shift; base_configs="$(cd "$1" && pwd)" ;;
     *) ve_die "regression_md5.sh: unknown option '$1'" ;;
   esac
   shift
@@ -84,15 +88,15 @@ for c in "${cases[@]}"; do
     continue
   fi
   mkdir -p "$runs/$name"
-  data_key="$(md5 "$VE_ROOT/$config")_$(fingerprint "$dataset")"
   for side in base new; do
-    bin="$base_bin"
-    [ "$side" = new ] && bin="$new_bin"
-    key="$cache/$(md5 "$bin/vitamin_e_run")_${name}_$data_key"
+    bin="$base_bin" config_path="$base_configs/$(basename "$config")"
+    [ "$side" = new ] && bin="$new_bin" config_path="$VE_ROOT/$config"
+    [ -f "$config_path" ] || ve_die "no config $config_path"
+    key="$cache/$(md5 "$bin/vitamin_e_run")_${name}_$(md5 "$config_path")_$(fingerprint "$dataset")"
     out="$runs/$name/$side"
     if [ ! -f "$key" ] || [ "$keep" = 1 ]; then
       rm -rf "$out"
-      "$bin/vitamin_e_run" --dataset "$dataset" --config "$VE_ROOT/$config" --out "$out" --quiet \
+      "$bin/vitamin_e_run" --dataset "$dataset" --config "$config_path" --out "$out" --quiet \
         >"$runs/$name/$side.log" 2>&1 || ve_die "vitamin_e_run ($side) failed on $name (log: $runs/$name/$side.log)"
       echo "$(md5 "$out/trajectory.txt") $(poses "$out/trajectory.txt")" >"$key"
     fi
