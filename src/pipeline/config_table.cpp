@@ -200,6 +200,9 @@ std::vector<Field> configTable(SystemConfig& c) {
         "... or fewer than this share of the tracked map points: the pose is not trusted, the frame is lost");
   t.key("weak_pose_max_step_ratio", &c.weak_pose_max_step_ratio,
         "... unless its translation step is within this factor of the motion model's (1: never)");
+  t.key("weak_pose_min_survival_ratio", &c.weak_pose_min_survival_ratio,
+        "... and this frame kept at least this share of the usual share (median of the last 10 tracked frames) of "
+        "the last frame's map tracks: fewer is a cut, whose survivors agree on any prediction (0: always)");
   t.key("max_outlier_count", &c.max_outlier_count, "times a point may be an outlier before it is removed");
   t.key("max_reprojection_px", &c.max_reprojection_px,
         "an observation's residual after BA above which its point is flagged [px]");

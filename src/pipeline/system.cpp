@@ -378,15 +378,28 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
 PoseEstimate System::Impl::estimatePose(const FrameContext& frame, const EndedTracks& ended, FrameResult* result) {
   ScopedTimer timer(&timings, "pose", &result->timing_ms);
   FrameDiagnostics& d = result->diagnostics;
+  const std::vector<std::uint64_t> ended_map_tracks = countSurvivingMapTracks(frame, &d);
+  // The weak-pose exception below trusts the motion model when the tracks survived but many
+  // went wrong (blur). When far fewer of the last frame's map tracks survived than usually
+  // do here (a cut, a whip turn), the survivors sit on nearby extrema and agree on a pose
+  // near any prediction: no exception then.
+  const bool collapsed = d.prev_map_points > 0 &&
+                         track_survival.collapsed(d.prevMapTrackedFraction(), config.weak_pose_min_survival_ratio);
   // Accepted only when well constrained (enough inliers, and most of the
   // tracked map points agree): however many tracks a turn or a cut ended.
   const Eigen::Isometry3d predicted = motion.predict(frame.timestamp);  // across dropped frames too
-  PoseEstimate pose = localizer.estimate(frame, map, predicted, &motion.lastPose());
+  PoseEstimate pose = localizer.estimate(frame, map, predicted, collapsed ? nullptr : &motion.lastPose());
+  if (!pose.ok && collapsed) {
+    pose.why += "; " + std::to_string(d.prev_map_tracked) + " of the last frame's " +
+                std::to_string(d.prev_map_points) + " map tracks survived (usually " +
+                std::to_string(static_cast<int>(std::lround(100.0 * track_survival.usual()))) + " %)";
+  }
+  if (d.prev_map_points > 0) track_survival.add(d.prevMapTrackedFraction());
   d.pose_points = pose.num_points;
   d.pose_inliers = pose.num_inliers;
   // Where the ended map tracks went: judged at the new pose, or at the
   // motion model's prediction when there is none.
-  diagnosePreviousMapPoints(frame, ended, pose.ok ? pose.T_w_c : predicted, &d);
+  diagnoseEndedMapTracks(ended_map_tracks, ended, pose.ok ? pose.T_w_c : predicted, &d);
   if (pose.ok) penalize(pose.outliers);
   if (pose.weak_kept) {
     result->message = "weak pose kept: " + std::to_string(pose.num_inliers) + " of " + std::to_string(pose.num_points) +
@@ -450,23 +463,31 @@ void System::Impl::holdGroundScale(const FrameContext& frame, const Eigen::Isome
   scene_depth *= c.factor;
 }
 
-void System::Impl::diagnosePreviousMapPoints(const FrameContext& frame, const EndedTracks& ended,
-                                             const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d) const {
+std::vector<std::uint64_t> System::Impl::countSurvivingMapTracks(const FrameContext& frame, FrameDiagnostics* d) const {
   // Both id lists sorted and walked together: cheaper than hashing the
   // thousands of tracks of every frame (the tracker keeps its tracks in id order).
   std::vector<std::uint64_t> now;
   now.reserve(frame.tracks.size());
   for (const FrameTrack& t : frame.tracks) now.push_back(t.id);
   if (!std::is_sorted(now.begin(), now.end())) std::sort(now.begin(), now.end());
-  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
   d->prev_map_points = prev_mapped_ids.size();
+  std::vector<std::uint64_t> ended_ids;
   auto n = now.begin();
   for (std::uint64_t id : prev_mapped_ids) {
     while (n != now.end() && *n < id) ++n;
     if (n != now.end() && *n == id) {
       ++d->prev_map_tracked;
-      continue;
+    } else {
+      ended_ids.push_back(id);
     }
+  }
+  return ended_ids;
+}
+
+void System::Impl::diagnoseEndedMapTracks(const std::vector<std::uint64_t>& ended_ids, const EndedTracks& ended,
+                                          const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d) const {
+  const Eigen::Isometry3d T_c_w = T_w_c.inverse();
+  for (std::uint64_t id : ended_ids) {
     auto e = std::lower_bound(ended.begin(), ended.end(), id,
                               [](const EndedTracks::value_type& a, std::uint64_t b) { return a.first < b; });
     ++d->prev_map_lost_by[e != ended.end() && e->first == id ? e->second : "dropped"];
@@ -483,6 +504,7 @@ void System::Impl::diagnosePreviousMapPoints(const FrameContext& frame, const En
 void System::Impl::reset() {
   map_loaded = false;
   prev_mapped_ids.clear();
+  track_survival.clear();
   map.clear();
   relocalizer.clear();
   initializer.reset();

@@ -112,6 +112,8 @@ void SystemConfig::validate() const {
         "pipeline.min_pose_inlier_ratio must be in [0, 1]");
   check(weak_pose_max_step_ratio >= 1.0,
         "pipeline.weak_pose_max_step_ratio must be >= 1 (1: weak poses are never kept)");
+  check(weak_pose_min_survival_ratio >= 0.0 && weak_pose_min_survival_ratio <= 1.0,
+        "pipeline.weak_pose_min_survival_ratio must be in [0, 1] (0: the track survival is not checked)");
   check(max_outlier_count >= 1, "pipeline.max_outlier_count must be >= 1");
   check(max_reprojection_px > 0.0, "pipeline.max_reprojection_px must be > 0");
   check(ba_fixed_keyframes >= 1 && ba_fixed_keyframes < map.max_keyframes,

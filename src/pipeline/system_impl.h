@@ -20,6 +20,7 @@
 #include "vitamin_e/pipeline/recovery.h"
 #include "vitamin_e/pipeline/relocalizer.h"
 #include "vitamin_e/pipeline/system.h"
+#include "vitamin_e/pipeline/track_survival.h"
 
 namespace vitamin_e::pipeline {
 
@@ -88,10 +89,12 @@ struct System::Impl {
   // (ground.enabled); a correction rescales everything that holds map units.
   void holdGroundScale(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d);
   void recordPose(double t, const std::string& text, const Eigen::Isometry3d& T_w_c);
-  // Diagnostics: where the previous frame's map points went (still tracked,
-  // ended by reason, out of view or in view at T_w_c).
-  void diagnosePreviousMapPoints(const FrameContext& frame, const EndedTracks& ended, const Eigen::Isometry3d& T_w_c,
-                                 FrameDiagnostics* d) const;
+  // The previous frame's map tracks this frame still tracks (d->prev_map_points, prev_map_tracked);
+  // returns the ids of the ended ones, sorted.
+  std::vector<std::uint64_t> countSurvivingMapTracks(const FrameContext& frame, FrameDiagnostics* d) const;
+  // Diagnostics: where the ended map tracks went (by reason, out of view or in view at T_w_c).
+  void diagnoseEndedMapTracks(const std::vector<std::uint64_t>& ended_ids, const EndedTracks& ended,
+                              const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d) const;
   // A loss is not given up for a new map (system_map_io.cpp).
   bool keepRelocalizing() const;
 
@@ -117,6 +120,7 @@ struct System::Impl {
   RunCounters counters;
   std::vector<TrajectoryEntry> trajectory;
   std::vector<std::uint64_t> prev_mapped_ids;  // tracks with a map point at the end of the last tracked frame
+  TrackSurvival track_survival;                // the share of them the recent frames kept
   // both threads (StageTimings is thread-safe)
   StageTimings timings;
 };

@@ -34,21 +34,23 @@ struct SystemConfig {
   fusion::DenseMapperConfig dense = defaultDenseConfig();
 
   // --- pipeline (yaml section "pipeline") ---
-  int min_init_tracks = 200;               // tracks shared with the reference frame needed to try initializing
-  double init_min_disparity_px = 20.0;     // median track displacement before the two-view fit is tried
-  int init_max_pending_frames = 60;        // frames kept since the reference; beyond it the reference moves on
-  int min_pose_inliers = 30;               // fewer P3P inliers than this: the frame is lost
-  double min_pose_inlier_ratio = 0.5;      // ... or fewer than this share of the tracked map points
-  double weak_pose_max_step_ratio = 2.0;   // ... unless its step is within this factor of the predicted one
-  int max_outlier_count = 2;               // times a point may be an outlier before it is removed
-  double max_reprojection_px = 3.0;        // observation residual after BA above which a point is flagged
-  int ba_fixed_keyframes = 2;              // oldest keyframes held fixed in the keyframe BA (gauge and scale)
-  int ba_keyframe_sweeps = 5;              // subspace GN sweeps when a keyframe is inserted
-  int ba_frame_sweeps = 3;                 // subspace GN sweeps of the per-frame BA
-  int ba_free_keyframes = 4;               // newest keyframes optimized by the keyframe BA (with their points)
-  double keyframe_parallax_px = 20.0;      // rotation-compensated median parallax to the last keyframe
-  double keyframe_min_mapped_ratio = 0.5;  // fewer mapped tracks than this ratio also asks for a keyframe
-  double max_step_depth_ratio = 1.0;       // a per-frame step longer than this x scene depth is a failure
+  int min_init_tracks = 200;                  // tracks shared with the reference frame needed to try initializing
+  double init_min_disparity_px = 20.0;        // median track displacement before the two-view fit is tried
+  int init_max_pending_frames = 60;           // frames kept since the reference; beyond it the reference moves on
+  int min_pose_inliers = 30;                  // fewer P3P inliers than this: the frame is lost
+  double min_pose_inlier_ratio = 0.5;         // ... or fewer than this share of the tracked map points
+  double weak_pose_max_step_ratio = 2.0;      // ... unless its step is within this factor of the predicted one
+  double weak_pose_min_survival_ratio = 0.5;  // ... and the last frame's map tracks survived at least this
+                                              // share of the usual (median of the last 10 frames)
+  int max_outlier_count = 2;                  // times a point may be an outlier before it is removed
+  double max_reprojection_px = 3.0;           // observation residual after BA above which a point is flagged
+  int ba_fixed_keyframes = 2;                 // oldest keyframes held fixed in the keyframe BA (gauge and scale)
+  int ba_keyframe_sweeps = 5;                 // subspace GN sweeps when a keyframe is inserted
+  int ba_frame_sweeps = 3;                    // subspace GN sweeps of the per-frame BA
+  int ba_free_keyframes = 4;                  // newest keyframes optimized by the keyframe BA (with their points)
+  double keyframe_parallax_px = 20.0;         // rotation-compensated median parallax to the last keyframe
+  double keyframe_min_mapped_ratio = 0.5;     // fewer mapped tracks than this ratio also asks for a keyframe
+  double max_step_depth_ratio = 1.0;          // a per-frame step longer than this x scene depth is a failure
   // Map reuse: a new, unmapped track within reuse_radius_px of the projection of a
   // map point whose own track ended (still in the window, or dormant: see
   // map.max_dormant_landmarks) takes that point over, when the curvature signs
