@@ -27,6 +27,16 @@ fusion::DenseMapperConfig defaultDenseConfig() {
   return d;
 }
 
+tracking::TrackerConfig defaultTrackerConfig() {
+  tracking::TrackerConfig t;
+  t.lambda = 2.0;
+  t.max_align_disagreement_px = 0.0;
+  t.extremum_weight = 0.5;
+  t.align_radius_px = 3;
+  t.strength_at_subpixel_peak = false;  // strength checks on kappa at the integer maximum
+  return t;
+}
+
 SystemConfig loadSystemConfig(const std::string& yaml_path) {
   YAML::Node root;
   try {

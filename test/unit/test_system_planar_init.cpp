@@ -25,6 +25,7 @@
 #include "vitamin_e/synth/renderer.h"
 #include "vitamin_e/synth/scene.h"
 #include "vitamin_e/synth/sequence.h"
+#include "vitamin_e/tracking/dense_tracker.h"
 #include "wall_trip.h"
 
 namespace ve = vitamin_e;
@@ -61,7 +62,12 @@ WallRun runAlongWall(std::uint64_t scene_seed) {
   const ve::camera::Camera camera = ve::synth::makeSequenceCamera(kWidth, kHeight, true);
   const ve::synth::Renderer renderer(scene, camera);
 
-  const ve::pipeline::SystemConfig config = ve::test::halfResolutionConfig();
+  // The tracker's standalone settings: the seeds below were found (a sweep of seeds 1-12)
+  // with their correspondences, on which the five-point RANSAC returns the twisted motion.
+  // The SLAM's default tracker gives other correspondences (at seed 3 the essential
+  // matrix's motion is then the true one, and the homography path is not needed).
+  ve::pipeline::SystemConfig config = ve::test::halfResolutionConfig();
+  config.tracker = ve::tracking::TrackerConfig{};
   ve::pipeline::System system(config, camera);
 
   WallRun run;

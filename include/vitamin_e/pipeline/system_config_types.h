@@ -19,15 +19,21 @@ namespace vitamin_e::pipeline {
 // scene depth at initialization (voxels of 2% of it, truncation 5 voxels).
 fusion::DenseMapperConfig defaultDenseConfig();
 
+// The dense tracker as validated with the SLAM on the renders and the real clips (the
+// tracker's own defaults are those of its standalone tests): a weaker flow prior and no
+// patch confirmation of the climb (the pose's RANSAC and BA reject what the confirmation
+// would; TrackSurvival tells a cut from the survival of the map tracks instead).
+tracking::TrackerConfig defaultTrackerConfig();
+
 struct SystemConfig {
-  tracking::TrackerConfig tracker;              // yaml section "tracker"
-  geometry::TwoViewConfig init;                 // yaml section "init"
-  geometry::PnpConfig pnp;                      // yaml section "pnp"
-  geometry::TriangulationConfig triangulation;  // yaml section "triangulation"
-  optimization::BaOptions ba;                   // yaml section "ba"
-  map::MapConfig map;                           // yaml section "map"
-  RelocalizerConfig relocalization;             // yaml section "relocalization"
-  GroundScaleConfig ground;                     // yaml section "ground"
+  tracking::TrackerConfig tracker = defaultTrackerConfig();  // yaml section "tracker"
+  geometry::TwoViewConfig init;                              // yaml section "init"
+  geometry::PnpConfig pnp;                                   // yaml section "pnp"
+  geometry::TriangulationConfig triangulation;               // yaml section "triangulation"
+  optimization::BaOptions ba;                                // yaml section "ba"
+  map::MapConfig map;                                        // yaml section "map"
+  RelocalizerConfig relocalization;                          // yaml section "relocalization"
+  GroundScaleConfig ground;                                  // yaml section "ground"
   // Dense reconstruction (yaml section "dense"): run by the offline runner and
   // the ROS meshing nodelet on the system's per-frame points, not by System.
   bool dense_enabled = true;
