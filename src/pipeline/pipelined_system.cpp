@@ -8,10 +8,18 @@ namespace vitamin_e::pipeline {
 
 PipelinedSystem::PipelinedSystem(const SystemConfig& config, const camera::Camera& camera,
                                  const PipelinedOptions& options, ResultCallback on_result)
-    : system_(std::make_unique<System>(config, camera)),
+    : PipelinedSystem(std::make_unique<System>(config, camera), options, std::move(on_result)) {}
+
+PipelinedSystem::PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result)
+    : PipelinedSystem(std::unique_ptr<System>(), options, std::move(on_result), &system) {}
+
+PipelinedSystem::PipelinedSystem(std::unique_ptr<System> owned, const PipelinedOptions& options,
+                                 ResultCallback on_result, System* borrowed)
+    : owned_(std::move(owned)),
+      system_(owned_ ? owned_.get() : borrowed),
       on_result_(std::move(on_result)),
       input_(options.input_capacity, options.drop_oldest),
-      tracked_(2, false) {
+      tracked_(options.tracked_capacity, false) {
   tracking_thread_ = std::thread([this] { trackingLoop(); });
   mapping_thread_ = std::thread([this] { mappingLoop(); });
 }

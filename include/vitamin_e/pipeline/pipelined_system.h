@@ -23,8 +23,9 @@
 namespace vitamin_e::pipeline {
 
 struct PipelinedOptions {
-  std::size_t input_capacity = 2;  // frames waiting for the tracker
-  bool drop_oldest = false;        // live input: drop the oldest waiting frame instead of blocking submit()
+  std::size_t input_capacity = 2;    // frames waiting for the tracker
+  std::size_t tracked_capacity = 2;  // tracked frames waiting for the mapper (fewer: less latency, live)
+  bool drop_oldest = false;          // live input: drop the oldest waiting frame instead of blocking submit()
 };
 
 class PipelinedSystem {
@@ -34,6 +35,9 @@ class PipelinedSystem {
   // on_result is called on the mapping thread, once per processed frame, in order.
   PipelinedSystem(const SystemConfig& config, const camera::Camera& camera, const PipelinedOptions& options,
                   ResultCallback on_result);
+  // The same on a System the caller owns (it must outlive this, and nothing else may
+  // use it until flush() or the destructor has returned).
+  PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result);
   ~PipelinedSystem();  // finishes the submitted frames, then joins both threads
   PipelinedSystem(const PipelinedSystem&) = delete;
   PipelinedSystem& operator=(const PipelinedSystem&) = delete;
@@ -66,10 +70,13 @@ class PipelinedSystem {
     double timestamp;
     std::string timestamp_text;
   };
+  PipelinedSystem(std::unique_ptr<System> owned, const PipelinedOptions& options, ResultCallback on_result,
+                  System* borrowed = nullptr);
   void trackingLoop();
   void mappingLoop();
 
-  std::unique_ptr<System> system_;
+  std::unique_ptr<System> owned_;  // null when the caller owns the System
+  System* system_;
   ResultCallback on_result_;
   BoundedQueue<Input> input_;
   BoundedQueue<TrackedFrame> tracked_;
