@@ -48,6 +48,7 @@ bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::
 
 void PipelinedSystem::trackingLoop() {
   while (std::optional<Input> in = input_.pop()) {
+    setBusy(&tracking_busy_, true);
     TrackedFrame frame;
     const double cpu0 = threadCpuMs();
     try {
@@ -61,6 +62,8 @@ void PipelinedSystem::trackingLoop() {
     {
       std::lock_guard<std::mutex> lock(count_mutex_);
       cpu_.tracking_ms += cpu;
+      tracking_busy_ = false;  // the frame waits for the mapper now
+      idle_cv_.notify_all();
     }
     tracked_.push(std::move(frame));
   }
@@ -69,12 +72,14 @@ void PipelinedSystem::trackingLoop() {
 
 void PipelinedSystem::mappingLoop() {
   while (std::optional<TrackedFrame> frame = tracked_.pop()) {
+    setBusy(&mapping_busy_, true);
     const double cpu0 = threadCpuMs();
     FrameResult result = system_->mapFrame(std::move(*frame));
     const double cpu = threadCpuMs() - cpu0;
     if (on_result_) on_result_(std::move(result));
     std::lock_guard<std::mutex> lock(count_mutex_);
     cpu_.mapping_ms += cpu;
+    mapping_busy_ = false;
     ++finished_;
     idle_cv_.notify_all();
   }
@@ -83,6 +88,20 @@ void PipelinedSystem::mappingLoop() {
 void PipelinedSystem::flush() {
   std::unique_lock<std::mutex> lock(count_mutex_);
   idle_cv_.wait(lock, [&] { return finished_ >= submitted_; });
+}
+
+void PipelinedSystem::setBusy(bool* stage, bool busy) {
+  std::lock_guard<std::mutex> lock(count_mutex_);
+  *stage = busy;
+  idle_cv_.notify_all();
+}
+
+void PipelinedSystem::waitUntilNoneWaiting() {
+  std::unique_lock<std::mutex> lock(count_mutex_);
+  idle_cv_.wait(lock, [&] {
+    const std::size_t on_stage = (tracking_busy_ ? 1 : 0) + (mapping_busy_ ? 1 : 0);
+    return submitted_ - finished_ <= on_stage;
+  });
 }
 
 PipelinedSystem::StageCpu PipelinedSystem::stageCpuMs() const {

@@ -75,6 +75,10 @@ void SessionRunner::flush() {
   if (pipeline_) pipeline_->flush();
 }
 
+void SessionRunner::waitUntilNoneWaiting() {
+  if (pipeline_) pipeline_->waitUntilNoneWaiting();
+}
+
 void SessionRunner::reset(const std::string& why) {
   if (!pipeline_) {
     session_.reset(why);

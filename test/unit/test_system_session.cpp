@@ -263,6 +263,24 @@ TEST(SystemSessionRunner, PipelinedResultsInOrderWithTickets) {
   }
 }
 
+// A live caller that waits until no frame waits for a stage has at most one frame per stage
+// in the pipeline (tracking, mapping) when it takes its next one.
+TEST(SystemSessionRunner, PipelinedWaitUntilNoneWaitingBoundsTheFramesInFlight) {
+  const Frames& f = frames();
+  Collected got;
+  pl::SessionRunner runner(pl::SystemConfig{}, f.camera, {}, {true, 1}, collectInto(&got));
+  std::size_t most = 0;
+  for (std::size_t i = 0; i < 40; ++i) {
+    runner.waitUntilNoneWaiting();
+    most = std::max(most, runner.inFlight());
+    ASSERT_TRUE(runner.admit(f.stamps[i]).admitted);
+    ASSERT_TRUE(runner.process(f.images[i], f.stamps[i], "", i));
+  }
+  runner.flush();
+  EXPECT_EQ(got.results.size(), 40u);
+  EXPECT_LE(most, 2u);
+}
+
 // Pipelined through a time jump (relocalized in the same map) and a reset (a new map): the
 // pipeline is emptied before each, and the results keep coming with their tickets.
 TEST(SystemSessionRunner, PipelinedTimeJumpAndReset) {

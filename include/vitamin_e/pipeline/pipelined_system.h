@@ -48,6 +48,10 @@ class PipelinedSystem {
   bool submit(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
   // Blocks until every submitted frame has been mapped (or dropped).
   void flush();
+  // Blocks until no submitted frame waits for a stage (the tracker and the mapper may each be
+  // on one): a live caller that then takes its newest frame keeps stale frames out of the
+  // queues, and the latency at about one tracking plus one or two mappings.
+  void waitUntilNoneWaiting();
   std::size_t droppedFrames() const;
   // CPU time [ms] the two threads spent in trackFrame and in mapFrame so far
   // (on_result not included; the tracker's helper threads not either).
@@ -73,6 +77,7 @@ class PipelinedSystem {
   PipelinedSystem(std::unique_ptr<System> owned, const PipelinedOptions& options, ResultCallback on_result,
                   System* borrowed = nullptr);
   void trackingLoop();
+  void setBusy(bool* stage, bool busy);  // under count_mutex_, waking the waiters
   void mappingLoop();
 
   std::unique_ptr<System> owned_;  // null when the caller owns the System
@@ -84,6 +89,7 @@ class PipelinedSystem {
   mutable std::mutex count_mutex_;
   std::condition_variable idle_cv_;
   std::size_t submitted_ = 0, finished_ = 0, dropped_ = 0;
+  bool tracking_busy_ = false, mapping_busy_ = false;  // a stage is on a frame
   StageCpu cpu_;
 };
 

@@ -54,11 +54,14 @@ class SessionRunner {
   bool process(const cv::Mat& image, double timestamp, const std::string& timestamp_text, std::uint64_t ticket);
   // Blocks until every processed frame's on_result has returned.
   void flush();
+  // Pipelined: blocks until no frame waits for a stage (PipelinedSystem::waitUntilNoneWaiting),
+  // the moment for a live caller to take its newest frame. Sequential: returns at once.
+  void waitUntilNoneWaiting();
   // Session::reset after flush().
   void reset(const std::string& why);
 
   bool pipelined() const { return options_.pipelined; }
-  // Frames given to process() whose on_result has not returned yet.
+  // Frames given to process() not handed to on_result yet.
   std::size_t inFlight() const;
   // flush() first: the pipeline's mapping thread writes the session's System.
   // (on_result may read them: it runs where the System is written.)

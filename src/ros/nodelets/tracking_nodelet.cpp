@@ -428,7 +428,12 @@ void TrackingNodelet::enqueue(cv::Mat gray, const std_msgs::Header& header) {
 void TrackingNodelet::slamLoop() {
   std::optional<QueuedFrame> frame;
   SlamQueue<QueuedFrame>::Command command;
-  while (queue_->next(&frame, &command)) {
+  const bool live = !params_.process_all_frames;
+  while (true) {
+    // Live and pipelined: the newest frame is taken when a stage can start on it, not held
+    // stale in front of a busy one (sequential: at once).
+    if (live) runner_->waitUntilNoneWaiting();
+    if (!queue_->next(&frame, &command)) break;
     if (command) {
       runner_->flush();  // the command may read or change what the runner's frames change
       command();
