@@ -1,6 +1,7 @@
 // Live.* (live.test): a bag played as a live camera (no clock, faster than recorded) into the
-// pipelined tracker: frames are dropped and tracking goes on. Correctness only (poses, no
-// relocalization, frame order); how fast is scripts/bench_live.sh's.
+// pipelined tracker: frames are dropped and tracking goes on, and the services that read the
+// map work while frames are in the pipeline. Correctness only (poses, no relocalization, frame
+// order); how fast is scripts/bench_live.sh's.
 #include <algorithm>
 #include <string>
 
@@ -8,12 +9,14 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <std_srvs/SetBool.h>
+#include <std_srvs/Trigger.h>
 
 #include "ros_test_helpers.h"
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/eval/metrics.h"
 #include "vitamin_e/eval/trajectory.h"
+#include "vitamin_e/map/map_file.h"
 
 using vitamin_e_test::privateParam;
 using vitamin_e_test::Watcher;
@@ -33,6 +36,18 @@ TEST(Live, PipelinedTrackingGoesOnWithDroppedFrames) {
   std_srvs::SetBool resume;
   resume.request.data = false;
   ASSERT_TRUE(ros::service::call("/player/pause_playback", resume));
+
+  // The services that read the map wait for the pipeline's frames while the bag goes on.
+  ASSERT_TRUE(status.waitFor([](const auto& m) { return !m.empty() && m.back()->frames_tracked >= 30; }, 60.0));
+  vitamin_e::SaveFile save_map;
+  save_map.request.path = privateParam("output_dir", "/tmp") + "/live_map.vemap";
+  ASSERT_TRUE(ros::service::call("/tracking/save_map", save_map));
+  EXPECT_TRUE(save_map.response.success) << save_map.response.message;
+  EXPECT_NO_THROW(vitamin_e::map::loadMapFile(save_map.request.path));
+  vitamin_e::SaveFile points;
+  points.request.path = privateParam("output_dir", "/tmp") + "/live_points.ply";
+  ASSERT_TRUE(ros::service::call("/tracking/export_points", points));
+  EXPECT_TRUE(points.response.success) << points.response.message;
 
   // The last image is always processed (nothing newer replaces it in the live queue).
   const double last_stamp = truth.back().t;
@@ -75,4 +90,8 @@ TEST(Live, PipelinedTrackingGoesOnWithDroppedFrames) {
   ROS_INFO_STREAM("live trajectory vs ground truth:\n" << eval::summary(result, config));
   RecordProperty("ate_rmse_m", std::to_string(result.ate.rmse));
   EXPECT_LT(result.ate.rmse, std::stod(privateParam("max_ate_m", "0.003")));
+
+  std_srvs::Trigger reset;
+  ASSERT_TRUE(ros::service::call("/tracking/reset", reset));
+  EXPECT_TRUE(reset.response.success) << reset.response.message;
 }
