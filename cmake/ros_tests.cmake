@@ -26,6 +26,7 @@ if(TARGET vitamin_e_make_sequence)
   list(APPEND _ve_bag_deps vitamin_e_make_sequence)
 endif()
 add_custom_command(OUTPUT ${VE_TEST_DATA}/sequence.bag ${VE_TEST_DATA}/sensors.bag ${VE_TEST_DATA}/long.bag
+    ${VE_TEST_DATA}/long_groundtruth.tum
   COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/make_test_bag.py ${_ve_bag_args}
   DEPENDS ${_ve_bag_deps}
   COMMENT "rostest input sequence -> ${VE_TEST_DATA}")

@@ -8,10 +8,18 @@ namespace vitamin_e::pipeline {
 
 PipelinedSystem::PipelinedSystem(const SystemConfig& config, const camera::Camera& camera,
                                  const PipelinedOptions& options, ResultCallback on_result)
-    : system_(std::make_unique<System>(config, camera)),
+    : PipelinedSystem(std::make_unique<System>(config, camera), options, std::move(on_result)) {}
+
+PipelinedSystem::PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result)
+    : PipelinedSystem(std::unique_ptr<System>(), options, std::move(on_result), &system) {}
+
+PipelinedSystem::PipelinedSystem(std::unique_ptr<System> owned, const PipelinedOptions& options,
+                                 ResultCallback on_result, System* borrowed)
+    : owned_(std::move(owned)),
+      system_(owned_ ? owned_.get() : borrowed),
       on_result_(std::move(on_result)),
       input_(options.input_capacity, options.drop_oldest),
-      tracked_(2, false) {
+      tracked_(options.tracked_capacity, false) {
   tracking_thread_ = std::thread([this] { trackingLoop(); });
   mapping_thread_ = std::thread([this] { mappingLoop(); });
 }
@@ -40,6 +48,7 @@ bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::
 
 void PipelinedSystem::trackingLoop() {
   while (std::optional<Input> in = input_.pop()) {
+    setBusy(&tracking_busy_, true);
     TrackedFrame frame;
     const double cpu0 = threadCpuMs();
     try {
@@ -53,6 +62,8 @@ void PipelinedSystem::trackingLoop() {
     {
       std::lock_guard<std::mutex> lock(count_mutex_);
       cpu_.tracking_ms += cpu;
+      tracking_busy_ = false;  // the frame waits for the mapper now
+      idle_cv_.notify_all();
     }
     tracked_.push(std::move(frame));
   }
@@ -61,12 +72,14 @@ void PipelinedSystem::trackingLoop() {
 
 void PipelinedSystem::mappingLoop() {
   while (std::optional<TrackedFrame> frame = tracked_.pop()) {
+    setBusy(&mapping_busy_, true);
     const double cpu0 = threadCpuMs();
     FrameResult result = system_->mapFrame(std::move(*frame));
     const double cpu = threadCpuMs() - cpu0;
     if (on_result_) on_result_(std::move(result));
     std::lock_guard<std::mutex> lock(count_mutex_);
     cpu_.mapping_ms += cpu;
+    mapping_busy_ = false;
     ++finished_;
     idle_cv_.notify_all();
   }
@@ -75,6 +88,20 @@ void PipelinedSystem::mappingLoop() {
 void PipelinedSystem::flush() {
   std::unique_lock<std::mutex> lock(count_mutex_);
   idle_cv_.wait(lock, [&] { return finished_ >= submitted_; });
+}
+
+void PipelinedSystem::setBusy(bool* stage, bool busy) {
+  std::lock_guard<std::mutex> lock(count_mutex_);
+  *stage = busy;
+  idle_cv_.notify_all();
+}
+
+void PipelinedSystem::waitUntilNoneWaiting() {
+  std::unique_lock<std::mutex> lock(count_mutex_);
+  idle_cv_.wait(lock, [&] {
+    const std::size_t on_stage = (tracking_busy_ ? 1 : 0) + (mapping_busy_ ? 1 : 0);
+    return submitted_ - finished_ <= on_stage;
+  });
 }
 
 PipelinedSystem::StageCpu PipelinedSystem::stageCpuMs() const {

@@ -194,16 +194,18 @@ def generate(out_dir, frames, generator, make_bag):
 
 def generate_long(out_dir, frames, generator, make_bag):
     """OUT_DIR/long.bag: the generator's room, `frames` frames (the camera goes on around the
-    room: the mesh grows), and OUT_DIR/long_calibration.yaml."""
+    room: the mesh grows), OUT_DIR/long_calibration.yaml and OUT_DIR/long_groundtruth.tum."""
     seq = os.path.join(out_dir, "generated_long")
     shutil.rmtree(seq, ignore_errors=True)
     subprocess.check_call([generator, "--out", seq, "--frames", str(frames), "--width", str(WIDTH),
                            "--height", str(HEIGHT)])
     subprocess.check_call([make_bag, seq, os.path.join(out_dir, "long.bag")])
     sensor = glob.glob(os.path.join(seq, "**", "cam0", "sensor.yaml"), recursive=True)
-    if not sensor:
-        sys.exit("make_test_bag.py: generator output lacks cam0/sensor.yaml")
+    gt = glob.glob(os.path.join(seq, "groundtruth*tum*"))
+    if not sensor or not gt:
+        sys.exit("make_test_bag.py: generator output lacks cam0/sensor.yaml or a groundtruth .tum")
     shutil.copy(sensor[0], os.path.join(out_dir, "long_calibration.yaml"))
+    shutil.copy(gt[0], os.path.join(out_dir, "long_groundtruth.tum"))
     shutil.rmtree(seq, ignore_errors=True)
 
 
@@ -229,6 +231,7 @@ def main():
             draw(tmp, args.long_frames)
             shutil.move(os.path.join(tmp, "sequence.bag"), os.path.join(args.out_dir, "long.bag"))
             shutil.move(os.path.join(tmp, "calibration.yaml"), os.path.join(args.out_dir, "long_calibration.yaml"))
+            shutil.move(os.path.join(tmp, "groundtruth.tum"), os.path.join(args.out_dir, "long_groundtruth.tum"))
             shutil.rmtree(tmp, ignore_errors=True)
     print("make_test_bag.py: %d frames in %s" % (args.frames, args.out_dir))
 

@@ -8,6 +8,7 @@
 //   MapFile.*    (map_file.test, test_ros_map_file.cpp) ~save_map / ~load_map / ~localization_only
 //   TimeJump.*, Loop.* (time_jump.test, loop.test; test_ros_time_jump.cpp) one map across time jumps
 //   ImuCheck.*   (imu_check.test, test_ros_frames.cpp) the camera -> IMU rotation against the gyroscope
+//   Live.*       (live.test, test_ros_live.cpp) a bag as a live camera into the pipelined tracker
 #include <algorithm>
 #include <chrono>
 #include <cmath>

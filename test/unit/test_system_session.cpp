@@ -9,6 +9,7 @@
 #include <map>
 
 #include "vitamin_e/pipeline/session.h"
+#include "vitamin_e/pipeline/session_runner.h"
 #include "vitamin_e/synth/camera_path.h"
 #include "vitamin_e/synth/renderer.h"
 #include "vitamin_e/synth/scene.h"
@@ -179,6 +180,140 @@ TEST(SystemSession, SegmentsFileReadsBack) {
   ASSERT_EQ(back[0].poses.size(), 2u);
   EXPECT_NEAR(back[0].poses[1].T_w_c.translation().y(), 4.0, 1e-9);
   EXPECT_FALSE(pl::saveSegmentsTum(segments, "T_map_c", "/nonexistent/dir/x.txt", &error));
+}
+
+
+namespace {
+
+struct Collected {
+  std::vector<std::uint64_t> tickets;
+  std::vector<pl::FrameResult> results;
+};
+
+pl::SessionRunner::ResultCallback collectInto(Collected* c) {
+  return [c](pl::FrameResult&& r, std::uint64_t ticket) {
+    c->tickets.push_back(ticket);
+    c->results.push_back(std::move(r));
+  };
+}
+
+// Feeds frames [begin, end) through admit + process with ticket = frame index.
+void feed(pl::SessionRunner* runner, std::size_t begin, std::size_t end) {
+  const Frames& f = frames();
+  for (std::size_t i = begin; i < end; ++i) {
+    const pl::SessionStamp s = runner->admit(f.stamps[i]);
+    ASSERT_TRUE(s.admitted) << i << ": " << s.dropped_why;
+    ASSERT_TRUE(runner->process(f.images[i], f.stamps[i], "", i));
+  }
+}
+
+}  // namespace
+
+// Sequential: on_result before process() returns, and the poses of Session::process exactly.
+TEST(SystemSessionRunner, SequentialIsSessionProcess) {
+  const Frames& f = frames();
+  Collected got;
+  pl::SessionRunner runner(pl::SystemConfig{}, f.camera, {}, {}, collectInto(&got));
+  pl::Session session(pl::SystemConfig{}, f.camera);
+  for (std::size_t i = 0; i < f.images.size(); ++i) {
+    ASSERT_TRUE(runner.admit(f.stamps[i]).admitted);
+    ASSERT_TRUE(runner.process(f.images[i], f.stamps[i], "", 100 + i));
+    ASSERT_EQ(got.results.size(), i + 1) << "sequential: the result comes before process() returns";
+    EXPECT_EQ(got.tickets.back(), 100 + i);
+    const pl::SessionFrame r = session.process(f.images[i], f.stamps[i]);
+    ASSERT_EQ(r.result.pose_valid, got.results.back().pose_valid) << i;
+    if (r.result.pose_valid) {
+      EXPECT_TRUE(r.result.T_w_c.isApprox(got.results.back().T_w_c, 1e-12)) << i;
+    }
+  }
+  EXPECT_EQ(runner.session().framesTracked(), session.framesTracked());
+}
+
+// Pipelined: every frame's result once, in frame order, with its ticket; the frames tracked
+// about as in sequential mode (the tracker runs one frame ahead of the mapper's feedback).
+TEST(SystemSessionRunner, PipelinedResultsInOrderWithTickets) {
+  const Frames& f = frames();
+  Collected got;
+  {
+    pl::SessionRunner runner(pl::SystemConfig{}, f.camera, {}, {true, 1}, collectInto(&got));
+    EXPECT_TRUE(runner.pipelined());
+    feed(&runner, 0, f.images.size());
+    runner.flush();
+    EXPECT_EQ(runner.inFlight(), 0u);
+    ASSERT_EQ(got.results.size(), f.images.size());
+    for (std::size_t i = 0; i < got.results.size(); ++i) {
+      EXPECT_EQ(got.tickets[i], i);
+      EXPECT_DOUBLE_EQ(got.results[i].timestamp, f.stamps[i]);
+    }
+    pl::Session sequential(pl::SystemConfig{}, f.camera);
+    for (std::size_t i = 0; i < f.images.size(); ++i) sequential.process(f.images[i], f.stamps[i]);
+    std::printf("tracked: pipelined %zu, sequential %zu of %zu\n", runner.session().framesTracked(),
+                sequential.framesTracked(), f.images.size());
+    EXPECT_GE(runner.session().framesTracked() + 3, sequential.framesTracked());
+    EXPECT_EQ(runner.session().relocalizations(), 0);
+    EXPECT_EQ(runner.session().initRetries(), 0);
+
+    // A wrong image: thrown on the caller's thread, no result, nothing left in flight.
+    ASSERT_TRUE(runner.admit(f.stamps.back() + 1.0).admitted);
+    EXPECT_THROW(runner.process(cv::Mat(10, 10, CV_8UC1, cv::Scalar(0)), f.stamps.back() + 1.0, "", 999),
+                 std::invalid_argument);
+    runner.flush();
+    EXPECT_EQ(runner.inFlight(), 0u);
+    EXPECT_EQ(got.results.size(), f.images.size());
+  }
+}
+
+// A live caller that waits until no frame waits for a stage has at most one frame per stage
+// in the pipeline (tracking, mapping) when it takes its next one.
+TEST(SystemSessionRunner, PipelinedWaitUntilNoneWaitingBoundsTheFramesInFlight) {
+  const Frames& f = frames();
+  Collected got;
+  pl::SessionRunner runner(pl::SystemConfig{}, f.camera, {}, {true, 1}, collectInto(&got));
+  std::size_t most = 0;
+  for (std::size_t i = 0; i < 40; ++i) {
+    runner.waitUntilNoneWaiting();
+    most = std::max(most, runner.inFlight());
+    ASSERT_TRUE(runner.admit(f.stamps[i]).admitted);
+    ASSERT_TRUE(runner.process(f.images[i], f.stamps[i], "", i));
+  }
+  runner.flush();
+  EXPECT_EQ(got.results.size(), 40u);
+  EXPECT_LE(most, 2u);
+}
+
+// Pipelined through a time jump (relocalized in the same map) and a reset (a new map): the
+// pipeline is emptied before each, and the results keep coming with their tickets.
+TEST(SystemSessionRunner, PipelinedTimeJumpAndReset) {
+  const Frames& f = frames();
+  Collected got;
+  pl::SessionRunner runner(pl::SystemConfig{}, f.camera, {}, {true, 1}, collectInto(&got));
+  feed(&runner, 0, f.images.size());
+  const std::size_t half = f.images.size() / 2;
+  const pl::SessionStamp jump = runner.admit(f.stamps[half]);
+  ASSERT_TRUE(jump.admitted);
+  EXPECT_TRUE(jump.time_jump);
+  EXPECT_EQ(got.results.size(), f.images.size()) << "the frames before a time jump are done first";
+  ASSERT_TRUE(runner.process(f.images[half], f.stamps[half], "", half));
+  feed(&runner, half + 1, f.images.size());
+  runner.flush();
+  ASSERT_EQ(got.results.size(), f.images.size() + (f.images.size() - half));
+  EXPECT_EQ(runner.session().segment(), 2u);
+  EXPECT_EQ(runner.session().map(), 1u) << "a time jump keeps the map";
+  EXPECT_GE(runner.session().relocalizations(), 1);
+  std::size_t tracked_second = 0;
+  for (std::size_t k = f.images.size(); k < got.results.size(); ++k) {
+    tracked_second += got.results[k].pose_valid ? 1 : 0;
+  }
+  EXPECT_GE(tracked_second, half - 3) << "the replayed frames were not tracked";
+
+  runner.reset("~reset");
+  EXPECT_EQ(runner.session().map(), 2u);
+  const std::size_t before = got.results.size();
+  feed(&runner, 0, 30);
+  runner.flush();
+  ASSERT_EQ(got.results.size(), before + 30);
+  EXPECT_EQ(got.tickets.back(), 29u);
+  EXPECT_GT(runner.system().framesTracked(), 20u) << "the new map is tracked";
 }
 
 int main(int argc, char** argv) {

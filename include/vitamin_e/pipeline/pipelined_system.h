@@ -23,8 +23,9 @@
 namespace vitamin_e::pipeline {
 
 struct PipelinedOptions {
-  std::size_t input_capacity = 2;  // frames waiting for the tracker
-  bool drop_oldest = false;        // live input: drop the oldest waiting frame instead of blocking submit()
+  std::size_t input_capacity = 2;    // frames waiting for the tracker
+  std::size_t tracked_capacity = 2;  // tracked frames waiting for the mapper (fewer: less latency, live)
+  bool drop_oldest = false;          // live input: drop the oldest waiting frame instead of blocking submit()
 };
 
 class PipelinedSystem {
@@ -34,6 +35,9 @@ class PipelinedSystem {
   // on_result is called on the mapping thread, once per processed frame, in order.
   PipelinedSystem(const SystemConfig& config, const camera::Camera& camera, const PipelinedOptions& options,
                   ResultCallback on_result);
+  // The same on a System the caller owns (it must outlive this, and nothing else may
+  // use it until flush() or the destructor has returned).
+  PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result);
   ~PipelinedSystem();  // finishes the submitted frames, then joins both threads
   PipelinedSystem(const PipelinedSystem&) = delete;
   PipelinedSystem& operator=(const PipelinedSystem&) = delete;
@@ -44,6 +48,10 @@ class PipelinedSystem {
   bool submit(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
   // Blocks until every submitted frame has been mapped (or dropped).
   void flush();
+  // Blocks until no submitted frame waits for a stage (the tracker and the mapper may each be
+  // on one): a live caller that then takes its newest frame keeps stale frames out of the
+  // queues, and the latency at about one tracking plus one or two mappings.
+  void waitUntilNoneWaiting();
   std::size_t droppedFrames() const;
   // CPU time [ms] the two threads spent in trackFrame and in mapFrame so far
   // (on_result not included; the tracker's helper threads not either).
@@ -66,10 +74,14 @@ class PipelinedSystem {
     double timestamp;
     std::string timestamp_text;
   };
+  PipelinedSystem(std::unique_ptr<System> owned, const PipelinedOptions& options, ResultCallback on_result,
+                  System* borrowed = nullptr);
   void trackingLoop();
+  void setBusy(bool* stage, bool busy);  // under count_mutex_, waking the waiters
   void mappingLoop();
 
-  std::unique_ptr<System> system_;
+  std::unique_ptr<System> owned_;  // null when the caller owns the System
+  System* system_;
   ResultCallback on_result_;
   BoundedQueue<Input> input_;
   BoundedQueue<TrackedFrame> tracked_;
@@ -77,6 +89,7 @@ class PipelinedSystem {
   mutable std::mutex count_mutex_;
   std::condition_variable idle_cv_;
   std::size_t submitted_ = 0, finished_ = 0, dropped_ = 0;
+  bool tracking_busy_ = false, mapping_busy_ = false;  // a stage is on a frame
   StageCpu cpu_;
 };
 

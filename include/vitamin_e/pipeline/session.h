@@ -79,6 +79,9 @@ class Session {
   // handled (a new segment); an admitted frame must then be given to system()
   // (process(), or trackFrame() and mapFrame() when the caller times them apart).
   SessionStamp admit(double timestamp);
+  // admit(timestamp) would not simply go on: the stamp is not after the last one (a time
+  // jump, or a frame out of order). Changes nothing.
+  bool stampGoesBack(double timestamp) const { return have_last_stamp_ && !(timestamp > last_stamp_); }
   // A new segment with a new map (a fresh System with the same configuration;
   // localization-only carries over, a loaded map does not): why is its note.
   void reset(const std::string& why);

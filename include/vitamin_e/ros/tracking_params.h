@@ -28,7 +28,8 @@ struct TrackingParams {
   std::string rectified = "auto";
   std::string image_transport = "raw";
   bool process_all_frames = false;
-  int queue_size = 0;  // 0: 1 live, 10000 with process_all_frames
+  bool pipelined = false;  // tracking and mapping on two threads (SessionRunner)
+  int queue_size = 0;      // 0: 1 live, 10000 with process_all_frames
   // Frames
   std::string map_frame = "map";
   std::string map_convention = "z_up";

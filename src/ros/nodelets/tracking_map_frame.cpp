@@ -13,7 +13,7 @@ namespace vitamin_e_ros {
 void TrackingNodelet::alignMap(const vitamin_e::pipeline::FrameResult& result) {
   const Eigen::Isometry3d T_w_c0 = Eigen::Isometry3d::Identity();
   have_map_ = true;
-  const unsigned map = session_->map();
+  const unsigned map = session().map();
   if (params_.opticalMap()) {
     T_map_w_ = Eigen::Isometry3d::Identity();
     map_description_ = "map = the first camera's optical frame";
@@ -24,7 +24,7 @@ void TrackingNodelet::alignMap(const vitamin_e::pipeline::FrameResult& result) {
     Eigen::Matrix3d R_c_imu;
     std::string source;
     if (imuToCamera(&R_c_imu, &source, &why_not)) {
-      const auto& trajectory = session_->system().trajectory();
+      const auto& trajectory = session().system().trajectory();
       const GravityWindow::Estimate e = imu_.upInWorld(
           result.timestamp, params_.gravity_window_s, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
       if (e.ok) {

@@ -104,7 +104,7 @@ void TrackingNodelet::onInit() {
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
   }
   startDiagnostics(nh, pnh);
-  if (session_) startSlam();
+  if (runner_) startSlam();
   // camera_info on the images' queue: it comes just before its image, and in one thread it is
   // taken first (on another queue the first images would find no calibration yet). Kept after
   // the calibration, to say when it changes.
@@ -240,11 +240,17 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
     return std::runtime_error(why);
   };
   try {
-    session_ = std::make_unique<vitamin_e::pipeline::Session>(system_config_, camera, params_.session());
+    vitamin_e::pipeline::RunnerOptions runner;
+    runner.pipelined = params_.pipelined;
+    runner_ = std::make_unique<vitamin_e::pipeline::SessionRunner>(
+        system_config_, camera, params_.session(), runner,
+        [this](FrameResult&& result, std::uint64_t ticket) { onResult(std::move(result), ticket); });
   } catch (const std::exception& e) {
     throw fail(std::string("cannot start the SLAM system: ") + e.what());
   }
-  NODELET_INFO("camera: %s", camera.describe().c_str());
+  NODELET_INFO("camera: %s; %s", camera.describe().c_str(),
+               params_.pipelined ? "pipelined: frame k+1 is tracked while frame k is mapped (two threads)"
+                                 : "sequential: tracking and mapping on one thread");
   bool localization_only = false;
   {
     std::lock_guard<std::mutex> lock(options_mutex_);
@@ -252,9 +258,9 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
   }
   if (loaded_map_) {
     try {
-      session_->system().loadMap(*loaded_map_);
+      runner_->system().loadMap(*loaded_map_);
     } catch (const std::exception& e) {
-      session_.reset();
+      runner_.reset();
       throw fail("~load_map '" + params_.load_map + "': " + e.what() +
                  " (nothing is processed: fix the file or the parameter and restart)");
     }
@@ -262,14 +268,14 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
     NODELET_INFO("relocalizing in the loaded map %s%s", params_.load_map.c_str(),
                  localization_only ? " (localization only)" : "");
   }
-  session_->system().setLocalizationOnly(localization_only);
-  snapshot_.update(*session_, T_map_w_);
+  runner_->system().setLocalizationOnly(localization_only);
+  snapshot_.update(session(), T_map_w_);
   camera_width_ = camera.width();
   camera_height_ = camera.height();
 }
 
 void TrackingNodelet::startSlam() {
-  // From here on session_ and the [SLAM] state are the SLAM thread's (the thread's start orders
+  // From here on runner_ and the [results] state are the SLAM thread's (the thread's start orders
   // the writes above before its first read).
   slam_thread_ = std::thread([this] { slamLoop(); });
   calibrated_ = true;
@@ -302,7 +308,7 @@ TrackingNodelet::~TrackingNodelet() {
   }
   stopThreads();
   // The SLAM thread has ended: its state is this thread's now.
-  if (session_ && started_) saveOnShutdown();
+  if (runner_ && started_) saveOnShutdown();
 }
 
 void TrackingNodelet::saveOnShutdown() {
@@ -312,9 +318,9 @@ void TrackingNodelet::saveOnShutdown() {
                "[vitamin_e] %zu frames processed, %zu tracked, %d init retries, %d relocalizations, %u segment(s) in "
                "%u map(s), %zu time jump(s); %zu frames dropped by the live queue, %zu still queued at shutdown (not "
                "processed)\n%s",
-               session_->framesProcessed(), session_->framesTracked(), session_->initRetries(),
-               session_->relocalizations(), session_->segment(), session_->map(), session_->timeJumps(), q.dropped,
-               q.discarded, session_->system().timings().table().c_str());
+               session().framesProcessed(), session().framesTracked(), session().initRetries(),
+               session().relocalizations(), session().segment(), session().map(), session().timeJumps(), q.dropped,
+               q.discarded, session().system().timings().table().c_str());
   std::string message;
   if (!params_.trajectory_file.empty()) {
     saveTrajectory(params_.trajectory_file, &message);
@@ -325,10 +331,10 @@ void TrackingNodelet::saveOnShutdown() {
     std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
   if (!params_.save_map.empty()) {
-    if (session_->system().localizationOnly()) {
+    if (session().system().localizationOnly()) {
       message = "localization only: the map is unchanged, " + params_.save_map + " not written";
     } else {
-      writeMap(session_->system().exportMap(), params_.save_map, &message);
+      writeMap(session().system().exportMap(), params_.save_map, &message);
     }
     std::fprintf(stderr, "[vitamin_e] %s\n", message.c_str());
   }
@@ -422,8 +428,14 @@ void TrackingNodelet::enqueue(cv::Mat gray, const std_msgs::Header& header) {
 void TrackingNodelet::slamLoop() {
   std::optional<QueuedFrame> frame;
   SlamQueue<QueuedFrame>::Command command;
-  while (queue_->next(&frame, &command)) {
+  const bool live = !params_.process_all_frames;
+  while (true) {
+    // Live and pipelined: the newest frame is taken when a stage can start on it, not held
+    // stale in front of a busy one (sequential: at once).
+    if (live) runner_->waitUntilNoneWaiting();
+    if (!queue_->next(&frame, &command)) break;
     if (command) {
+      runner_->flush();  // the command may read or change what the runner's frames change
       command();
       continue;
     }
@@ -437,6 +449,7 @@ void TrackingNodelet::slamLoop() {
     if (params_.debug_frame_delay_s > 0.0 && !queue_->waitFor(params_.debug_frame_delay_s)) continue;
     processFrame(*frame);
   }
+  runner_->flush();  // the frames given to the runner are published, and saved on shutdown
 }
 
 bool TrackingNodelet::runOnSlamThread(const std::function<void()>& work, std::string* why) {
@@ -469,50 +482,84 @@ bool TrackingNodelet::runOnSlamThread(const std::function<void()>& work, std::st
 
 void TrackingNodelet::processFrame(const QueuedFrame& frame) {
   const std_msgs::Header& header = frame.header;
+  PendingFrame pending;
   {
     std::lock_guard<std::mutex> lock(options_mutex_);
-    options_ = dyn_;
+    pending.options = dyn_;
   }
-  vitamin_e::pipeline::System& system = session_->system();
-  if (system.localizationOnly() != options_.localization_only) system.setLocalizationOnly(options_.localization_only);
-  frame_id_ =
+  // Written only here; the runner's threads read it.
+  if (runner_->system().localizationOnly() != pending.options.localization_only) {
+    runner_->flush();  // switched between two frames of the mapper
+    runner_->system().setLocalizationOnly(pending.options.localization_only);
+  }
+  pending.frame_id =
       !params_.camera_frame.empty() ? params_.camera_frame : (header.frame_id.empty() ? "camera" : header.frame_id);
-  if (!body_tf_sent_) publishBodyTransform();
-  const unsigned map_before = session_->map();
-  const auto start = std::chrono::steady_clock::now();
-  vitamin_e::pipeline::SessionFrame f;
-  try {
-    f = session_->process(frame.gray, header.stamp.toSec(), stampText(header.stamp.sec, header.stamp.nsec));
-  } catch (const std::exception& e) {
+  const double stamp = header.stamp.toSec();
+  const unsigned map_before = session().map();
+  const vitamin_e::pipeline::SessionStamp admitted = runner_->admit(stamp);
+  if (!admitted.admitted) {
     noteRejected();
-    NODELET_ERROR_THROTTLE(2.0, "frame %.9f not processed: %s", header.stamp.toSec(), e.what());
+    NODELET_ERROR_THROTTLE(2.0, "image dropped: %s", admitted.dropped_why.c_str());
     return;
   }
-  if (!f.processed) {
-    noteRejected();
-    NODELET_ERROR_THROTTLE(2.0, "image dropped: %s", f.dropped_why.c_str());
-    return;
-  }
-  const double ms = vitamin_e::elapsedMs(start);
-  FrameResult& result = f.result;
-  if (f.time_jump) {
+  if (admitted.time_jump) {
+    // The runner is idle (admit emptied it before the jump): its [results] state is ours.
     NODELET_WARN("%s: trajectory segment %u begins in map %u (~time_jump relocalize; ~reset starts a new map)",
-                 session_->segmentNote().c_str(), session_->segment(), session_->map());
-    if (session_->map() != map_before) {
+                 session().segmentNote().c_str(), session().segment(), session().map());
+    if (session().map() != map_before) {
       // Nothing to relocalize in: the session started a new map, with a map frame of its own.
-      snapshot_.update(*session_, T_map_w_);
+      snapshot_.update(session(), T_map_w_);
       have_map_ = false;
       T_map_w_ = Eigen::Isometry3d::Identity();
       map_description_.clear();
     }
     startPath();
   }
+  pending.frame = frame;
+  pending.start = std::chrono::steady_clock::now();
+  const std::uint64_t ticket = next_ticket_++;
+  {
+    // Before process(): the result may come before it returns.
+    std::lock_guard<std::mutex> lock(pending_mutex_);
+    pending_.emplace(ticket, std::move(pending));
+  }
+  bool processed = false;
+  std::string why = "shutting down";
+  try {
+    processed = runner_->process(frame.gray, stamp, stampText(header.stamp.sec, header.stamp.nsec), ticket);
+  } catch (const std::exception& e) {
+    why = e.what();
+  }
+  if (!processed) {
+    {
+      std::lock_guard<std::mutex> lock(pending_mutex_);
+      pending_.erase(ticket);
+    }
+    noteRejected();
+    NODELET_ERROR_THROTTLE(2.0, "frame %.9f not processed: %s", stamp, why.c_str());
+  }
+}
+
+void TrackingNodelet::onResult(FrameResult&& result, std::uint64_t ticket) {
+  PendingFrame frame;
+  {
+    std::lock_guard<std::mutex> lock(pending_mutex_);
+    const auto it = pending_.find(ticket);
+    if (it == pending_.end()) return;  // cannot happen: every ticket is in pending_ until its result
+    frame = std::move(it->second);
+    pending_.erase(it);
+  }
+  const std_msgs::Header& header = frame.frame.header;
+  options_ = frame.options;
+  frame_id_ = frame.frame_id;
+  if (!body_tf_sent_) publishBodyTransform();
+  const double ms = vitamin_e::elapsedMs(frame.start);
   if (result.pose_valid && !have_map_) alignMap(result);
   // IMU samples older than any later frame's gravity window (until the map is fixed), or than
   // the rotation check's last interval, are not needed.
   imu_.dropBefore(header.stamp.toSec() - (have_map_ ? 2.0 : params_.gravity_window_s + 1.0));
   if (!params_.imu_topic.empty() && !rotation_checked_) checkImuRotation(result);
-  snapshot_.update(*session_, T_map_w_);
+  snapshot_.update(session(), T_map_w_);
   // Everything published is in the map frame: T_map_c = T_map_w T_w_c, p_map = T_map_w p_w.
   if (have_map_) {
     result.T_w_c = T_map_w_ * result.T_w_c;
@@ -520,19 +567,19 @@ void TrackingNodelet::processFrame(const QueuedFrame& frame) {
       if (p.has_position) p.p_w = T_map_w_ * p.p_w;
     }
   }
-  publishResult(result, frame, ms);
+  publishResult(result, frame.frame, ms);
   previous_pose_valid_ = result.pose_valid;
 }
 
 void TrackingNodelet::resetMap(const std::string& why) {
-  session_->reset(why);
-  snapshot_.update(*session_, T_map_w_);  // the finished segment, in the old map frame
+  runner_->reset(why);
+  snapshot_.update(session(), T_map_w_);  // the finished segment, in the old map frame
   have_map_ = false;
   T_map_w_ = Eigen::Isometry3d::Identity();
   map_description_.clear();
   have_rotation_pose_ = false;
   startPath();
-  snapshot_.update(*session_, T_map_w_);
+  snapshot_.update(session(), T_map_w_);
 }
 
 void TrackingNodelet::startPath() {
@@ -543,8 +590,8 @@ void TrackingNodelet::startPath() {
   path_.poses.clear();
   path_pub_.publish(path_);
   std::lock_guard<std::mutex> lock(stats_mutex_);
-  stats_.segment = session_->segment();
-  stats_.map = session_->map();
+  stats_.segment = session().segment();
+  stats_.map = session().map();
 }
 
 void TrackingNodelet::reconfigure(vitamin_e::TrackingConfig& config, uint32_t) {
@@ -563,8 +610,8 @@ bool TrackingNodelet::resetService(std_srvs::Trigger::Request&, std_srvs::Trigge
   res.success = runOnSlamThread(
       [&] {
         resetMap("~reset");
-        segment = session_->segment();
-        map = session_->map();
+        segment = session().segment();
+        map = session().map();
       },
       &why);
   if (!res.success) {
@@ -598,14 +645,14 @@ bool TrackingNodelet::saveTrajectory(const std::string& path, std::string* messa
   if (queue_) {
     // Said, so that a caller knows the file is a snapshot of a run still going on.
     const auto q = queue_->counts();
-    const std::size_t pending = q.waiting + (q.busy ? 1 : 0);
+    const std::size_t pending = q.waiting + (q.busy ? 1 : 0) + (runner_ ? runner_->inFlight() : 0);
     if (pending > 0) *message += "; " + std::to_string(pending) + " frame(s) not processed yet";
   }
   return true;
 }
 
 std::vector<vitamin_e::pipeline::MapPoint3> TrackingNodelet::mapPointsInMap() const {
-  auto points = session_->system().mapPoints();
+  auto points = session().system().mapPoints();
   for (auto& p : points) p.p_w = T_map_w_ * p.p_w;
   return points;
 }
@@ -645,7 +692,7 @@ bool TrackingNodelet::saveMapService(vitamin_e::SaveFile::Request& req, vitamin_
   // The map is the SLAM thread's: copied there between two frames, written here.
   auto save = [this](const std::string& path, std::string* message) {
     vitamin_e::map::MapFileContents contents;
-    if (!runOnSlamThread([&] { contents = session_->system().exportMap(); }, message)) return false;
+    if (!runOnSlamThread([&] { contents = session().system().exportMap(); }, message)) return false;
     return writeMap(contents, path, message);
   };
   if (answerSaveFile(req, params_.save_map, "save_map", "", &res, save)) NODELET_INFO("%s", res.message.c_str());

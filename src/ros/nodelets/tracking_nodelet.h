@@ -9,16 +9,23 @@
 //   image thread   own callback queue (image_queue_): camera_info (calibration, starts the
 //                  SLAM thread), then converts each image and pushes it into queue_ (live:
 //                  newest only; ~process_all_frames: blocks when full)
-//   SLAM thread    owns session_ and everything marked [SLAM] below: takes the frames (and
-//                  the commands the services post) from queue_, runs the SLAM, publishes
+//   SLAM thread    takes the frames (and the commands the services post) from queue_, checks
+//                  their stamps and hands them to runner_ (a pipeline::SessionRunner)
+//   results        where runner_ delivers the results (onResult) and everything marked
+//                  [results] below lives: the SLAM thread itself (sequential), or the
+//                  runner's mapping thread (~pipelined: frame k+1 is tracked on the runner's
+//                  tracking thread while frame k is mapped). The SLAM thread touches
+//                  [results] state only while the runner is idle: before a command it
+//                  flushes the runner, and a stamp going back empties it (admit)
 //   nodelet queue  (single-threaded) IMU, services, dynamic_reconfigure: they
 //                  never wait for a frame being processed; ~save_trajectory reads a snapshot,
 //                  ~reset / ~save_map / ~export_points run on the SLAM thread between two
-//                  frames (ahead of the waiting ones) and wait for that
+//                  frames (ahead of the waiting ones, after the runner's frames) and wait for that
 //   diagnostics    own thread, reads the statistics and the queue's counts
 // Shutdown (destructor): diagnostics stopped, queue closed, image subscriptions shut down,
-// image thread and SLAM thread joined, files saved; only then the publishers go.
+// image thread joined, the SLAM thread finishes the runner's frames and is joined, files saved; only then the publishers go.
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <functional>
@@ -51,6 +58,7 @@
 #include "vitamin_e/TrackingConfig.h"
 #include "vitamin_e/pipeline/dense_input.h"
 #include "vitamin_e/pipeline/session.h"
+#include "vitamin_e/pipeline/session_runner.h"
 #include "vitamin_e/ros/imu_buffer.h"
 #include "vitamin_e/ros/map_frame.h"
 #include "vitamin_e/ros/slam_queue.h"
@@ -70,6 +78,13 @@ class TrackingNodelet : public nodelet::Nodelet {
     std_msgs::Header header;
     double received_wall = 0.0;  // when the callback queued it (queue wait in the diagnostics)
   };
+  // A frame given to runner_, until its result comes: what publishing it needs.
+  struct PendingFrame {
+    QueuedFrame frame;
+    vitamin_e::TrackingConfig options;  // the reconfigure values as of the frame
+    std::string frame_id;               // its camera frame
+    std::chrono::steady_clock::time_point start;
+  };
 
   // onInit throws std::runtime_error (after a FATAL saying why) when the nodelet cannot run:
   // nodelet::Loader then unloads it and `nodelet load` (or tracking_node) exits non-zero.
@@ -82,10 +97,10 @@ class TrackingNodelet : public nodelet::Nodelet {
   void subscribeImages(ros::NodeHandle& image_nh, ros::NodeHandle& pnh);
   // makeSession, then startSlam.
   void createSession(const vitamin_e::camera::Camera& camera);
-  // Builds session_ (and loads ~load_map). Throws std::runtime_error (after a FATAL) when it
+  // Builds runner_ (and loads ~load_map). Throws std::runtime_error (after a FATAL) when it
   // cannot.
   void makeSession(const vitamin_e::camera::Camera& camera);
-  void startSlam();  // the SLAM thread, on session_
+  void startSlam();  // the SLAM thread, on runner_
   void imageCallback(const sensor_msgs::ImageConstPtr& msg);
   void compressedCallback(const sensor_msgs::CompressedImageConstPtr& msg);
   // The image callbacks' end: the calibration's size checked, the frame queued.
@@ -99,7 +114,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   bool exportPointsService(vitamin_e::SaveFile::Request& req, vitamin_e::SaveFile::Response& res);
   // The trajectory from the snapshot (any thread).
   bool saveTrajectory(const std::string& path, std::string* message);
-  // session_'s map points in the map frame: on the SLAM thread (or after it has ended).
+  // The session's map points in the map frame: [results] state.
   std::vector<vitamin_e::pipeline::MapPoint3> mapPointsInMap() const;
   bool writeMap(const vitamin_e::map::MapFileContents& contents, const std::string& path, std::string* message);
   bool writePoints(const std::vector<vitamin_e::pipeline::MapPoint3>& points, const std::string& path,
@@ -112,11 +127,16 @@ class TrackingNodelet : public nodelet::Nodelet {
   // Closes the queue, stops the image thread and joins the SLAM thread (destructor).
   void stopThreads();
 
-  // The SLAM thread (all [SLAM] state).
+  // The SLAM thread.
   void slamLoop();
-  // Stamp checks and time jumps (the session), SLAM, map frame, publishing.
+  // Stamp checks and time jumps (the session), then the frame to runner_.
   void processFrame(const QueuedFrame& frame);
-  // A new map (~reset): the session's next segment, the map frame and the path start over.
+  // [results] A frame's result: map frame, publishing.
+  void onResult(vitamin_e::pipeline::FrameResult&& result, std::uint64_t ticket);
+  // The session: [results] state (the SLAM thread reads it only while runner_ is idle).
+  const vitamin_e::pipeline::Session& session() const { return runner_->session(); }
+  // A new map (~reset; runner_ idle): the session's next segment, the map frame and the path
+  // start over.
   void resetMap(const std::string& why);
   // A new segment began (a time jump, or a reset): the path and the track trails start over.
   void startPath();
@@ -173,7 +193,7 @@ class TrackingNodelet : public nodelet::Nodelet {
 
   // The camera's size for the callbacks' check, set before calibrated_.
   int camera_width_ = 0, camera_height_ = 0;
-  std::atomic<bool> calibrated_{false};  // session_ exists and the SLAM thread runs
+  std::atomic<bool> calibrated_{false};  // runner_ exists and the SLAM thread runs
   bool started_ = false;                 // onInit completed (else nothing is saved at unload)
   // [image thread] The camera taken from camera_info, and whether a later one differed.
   vitamin_e::camera::Camera info_camera_;
@@ -183,9 +203,14 @@ class TrackingNodelet : public nodelet::Nodelet {
   std::mutex options_mutex_;
   vitamin_e::TrackingConfig dyn_;
 
-  // [SLAM] state: the SLAM thread's alone once it runs (the destructor's after the join).
-  vitamin_e::TrackingConfig options_;  // dyn_ as of the current frame
-  std::unique_ptr<vitamin_e::pipeline::Session> session_;
+  // The SLAM thread's (the destructor's after the join).
+  std::unique_ptr<vitamin_e::pipeline::SessionRunner> runner_;
+  std::uint64_t next_ticket_ = 0;
+  // The frames in runner_, by ticket (SLAM thread and results).
+  std::mutex pending_mutex_;
+  std::map<std::uint64_t, PendingFrame> pending_;
+  // [results] state: see Threads (the destructor's after the join).
+  vitamin_e::TrackingConfig options_;  // dyn_ as of the current result's frame
   ros::Time last_map_points_;
   std::string frame_id_;  // camera frame in use
   nav_msgs::Path path_;

@@ -1,5 +1,5 @@
-// TrackingNodelet: FrameResult (already in the map frame) -> messages, on the SLAM thread
-// (the publishing options are options_, the frame's copy of the reconfigure values). Every
+// TrackingNodelet: FrameResult (already in the map frame) -> messages, where the results come
+// (see Threads in tracking_nodelet.h; the publishing options are options_, the frame's copy of the reconfigure values). Every
 // pose and point is checked finite before it is published (a non-finite one is skipped with a
 // throttled error).
 #include <cmath>
@@ -38,15 +38,15 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
   status->num_tracked = static_cast<uint32_t>(result.num_tracked);
   status->num_mapped = static_cast<uint32_t>(result.num_mapped);
   status->map_size = static_cast<uint32_t>(result.map_size);
-  status->init_retries = session_->initRetries();
-  status->relocalizations = session_->relocalizations();
+  status->init_retries = session().initRetries();
+  status->relocalizations = session().relocalizations();
   status->ms_per_frame = static_cast<float>(ms);
-  status->frames_processed = session_->framesProcessed();
-  status->frames_tracked = session_->framesTracked();
-  status->segment = session_->segment();
-  status->map = session_->map();
+  status->frames_processed = session().framesProcessed();
+  status->frames_tracked = session().framesTracked();
+  status->segment = session().segment();
+  status->map = session().map();
   status->message = result.message;
-  if (session_->system().mapLoaded()) {  // a map from ~load_map: say whether the camera is in it
+  if (session().system().mapLoaded()) {  // a map from ~load_map: say whether the camera is in it
     const std::string where = result.pose_valid ? "localizing in loaded map" : "lost in loaded map";
     status->message = result.message.empty() ? where : where + ": " + result.message;
   }
@@ -61,7 +61,7 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
     stats_.tracked = result.num_tracked;
     stats_.mapped = result.num_mapped;
     stats_.map_size = result.map_size;
-    stats_.init_retries = session_->initRetries();
+    stats_.init_retries = session().initRetries();
     if (result.pose_valid) stats_.latency_s.push_back((ros::Time::now() - header.stamp).toSec());
     while (stats_.latency_s.size() > 200) stats_.latency_s.pop_front();
     while (stats_.processed_wall.size() > 2000) stats_.processed_wall.pop_front();
@@ -69,9 +69,9 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
 
   // Every result goes through the mesher's input, which adds up the map's scale corrections; the
   // points only when the mesher listens.
-  if (dense_input_map_ != session_->map()) {
+  if (dense_input_map_ != session().map()) {
     dense_input_.reset();  // a new map
-    dense_input_map_ = session_->map();
+    dense_input_map_ = session().map();
   }
   const bool to_mesher = frame_pub_.getNumSubscribers() > 0;
   const vitamin_e::fusion::DenseFrame dense = dense_input_.next(result, to_mesher && result.pose_valid);
@@ -216,16 +216,16 @@ void TrackingNodelet::publishPoints(const FrameResult& result, const std_msgs::H
 
 void TrackingNodelet::publishFrame(const vitamin_e::fusion::DenseFrame& dense, const std_msgs::Header& header) {
   vitamin_e::TrackedFramePtr frame(new vitamin_e::TrackedFrame);
-  toTrackedFrameMsg(dense, session_->system().camera(), frame.get());
+  toTrackedFrameMsg(dense, session().system().camera(), frame.get());
   frame->header.stamp = header.stamp;
   frame->header.frame_id = params_.map_frame;
   // The map's number: the mesher starts a new TSDF with a new map, not at a time jump in the same one.
-  frame->segment = session_->map();
+  frame->segment = session().map();
   frame_pub_.publish(vitamin_e::TrackedFrameConstPtr(frame));  // zero copy inside one manager
 }
 
 void TrackingNodelet::publishMapPoints(const ros::Time& stamp) {
-  const auto map = session_->system().mapPoints();
+  const auto map = session().system().mapPoints();
   std::vector<Eigen::Vector3f> points;
   std::vector<std::uint8_t> intensity;
   points.reserve(map.size());

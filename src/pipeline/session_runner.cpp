@@ -1,0 +1,97 @@
+#include "vitamin_e/pipeline/session_runner.h"
+
+#include <stdexcept>
+
+namespace vitamin_e::pipeline {
+
+SessionRunner::SessionRunner(const SystemConfig& config, const camera::Camera& camera, const SessionConfig& session,
+                             const RunnerOptions& options, ResultCallback on_result)
+    : session_(config, camera, session), options_(options), on_result_(std::move(on_result)) {
+  if (options_.queue_frames == 0) throw std::invalid_argument("SessionRunner: queue_frames must be >= 1");
+  if (options_.pipelined) startPipeline();
+}
+
+SessionRunner::~SessionRunner() { pipeline_.reset(); }
+
+void SessionRunner::startPipeline() {
+  // Blocking queues: every frame given to process() comes out, in order, so that the
+  // tickets match the results; a live caller drops frames before process().
+  PipelinedOptions p;
+  p.input_capacity = options_.queue_frames;
+  p.tracked_capacity = options_.queue_frames;
+  p.drop_oldest = false;
+  pipeline_ = std::make_unique<PipelinedSystem>(session_.system(), p,
+                                                [this](FrameResult result) { onPipelineResult(std::move(result)); });
+}
+
+SessionStamp SessionRunner::admit(double timestamp) {
+  if (!pipeline_ || !session_.stampGoesBack(timestamp)) return session_.admit(timestamp);
+  // A time jump may restart the tracking or replace the System (Session::reset): the
+  // pipeline is emptied and stopped first, and started again on the session's System.
+  pipeline_.reset();
+  const SessionStamp s = session_.admit(timestamp);
+  startPipeline();
+  return s;
+}
+
+bool SessionRunner::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
+                            std::uint64_t ticket) {
+  if (!pipeline_) {
+    FrameResult result = session_.system().process(image, timestamp, timestamp_text);
+    if (on_result_) on_result_(std::move(result), ticket);
+    return true;
+  }
+  {
+    // Before submit(): its result may come before submit() returns.
+    std::lock_guard<std::mutex> lock(tickets_mutex_);
+    tickets_.push_back(ticket);
+  }
+  bool queued = false;
+  try {
+    queued = pipeline_->submit(image, timestamp, timestamp_text);
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(tickets_mutex_);
+    tickets_.pop_back();  // not queued: no result takes it (earlier frames take the front)
+    throw;
+  }
+  if (!queued) {
+    std::lock_guard<std::mutex> lock(tickets_mutex_);
+    tickets_.pop_back();
+  }
+  return queued;
+}
+
+void SessionRunner::onPipelineResult(FrameResult&& result) {
+  std::uint64_t ticket = 0;
+  {
+    std::lock_guard<std::mutex> lock(tickets_mutex_);
+    ticket = tickets_.front();
+    tickets_.pop_front();
+  }
+  if (on_result_) on_result_(std::move(result), ticket);
+}
+
+void SessionRunner::flush() {
+  if (pipeline_) pipeline_->flush();
+}
+
+void SessionRunner::waitUntilNoneWaiting() {
+  if (pipeline_) pipeline_->waitUntilNoneWaiting();
+}
+
+void SessionRunner::reset(const std::string& why) {
+  if (!pipeline_) {
+    session_.reset(why);
+    return;
+  }
+  pipeline_.reset();  // its System is replaced
+  session_.reset(why);
+  startPipeline();
+}
+
+std::size_t SessionRunner::inFlight() const {
+  std::lock_guard<std::mutex> lock(tickets_mutex_);
+  return tickets_.size();
+}
+
+}  // namespace vitamin_e::pipeline
