@@ -109,10 +109,11 @@ std::vector<Row> table(TrackingParams* p) {
   t.push_back(row("process_all_frames", &p->process_all_frames,
                   "the SLAM queue (Threads and the frame queue): false, live: the newest frame only; true, bags: every "
                   "frame, the image callback waits when the queue is full"));
-  t.push_back(row("pipelined", &p->pipelined,
-                  "true: frame k+1 is tracked while frame k is mapped (two threads, as `vitamin_e_run --pipelined`; "
-                  "`live.launch` sets it); false: one SLAM thread, deterministic (the tests comparing with offline "
-                  "runs, `euroc.launch`). Results and publishing keep the frame order either way"));
+  t.push_back(
+      row("pipelined", &p->pipelined,
+          "true: frame k+1 is tracked while frame k is mapped (two threads, as `vitamin_e_run --pipelined`; "
+          "`live.launch pipelined:=true`); false: one SLAM thread, deterministic (the tests comparing with offline "
+          "runs, `euroc.launch`). Results and publishing keep the frame order either way"));
   t.push_back({"queue_size", "1, or 10000 with `process_all_frames`",
                "image subscriber queue (before the SLAM queue); 0: the default",
                [p](const XmlRpc::XmlRpcValue& v) { readValue("queue_size", v, &p->queue_size); }});
