@@ -4,7 +4,7 @@
 # project's headers through them. Checks only, never edits a file.
 #   ./scripts/tidy.sh [-j N] [REGEX]
 # -j N: parallel clang-tidy processes (default: nproc). REGEX: only the files whose path
-# matches it (e.g. 'src/pipeline/'). A full pass costs about 30 s of CPU per file (~70 CPU
+# matches it (e.g. 'src/pipeline/'). A full pass costs about 20 s of CPU per file (~50 CPU
 # minutes for the tree): CI checks the files each commit changes (scripts/check_style.sh runs
 # the same checks); this is the pass to run before a merge that touches many files.
 # Exit 0: clean; 1: findings (listed once each, with their check); 2: cannot check.
@@ -17,7 +17,7 @@ filter='.*'
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    -j) shift; jobs="$1" ;;
+    -j) [ $# -ge 2 ] || ve_die "tidy.sh: -j needs a number"; shift; jobs="$1" ;;
     -*) ve_die "tidy.sh: unknown option '$1'" ;;
     *) filter="$1" ;;
   esac
@@ -40,6 +40,7 @@ if grep -q -E 'error: ' "$log" && ! grep -q -E 'warning: ' "$log"; then
 fi
 findings=$(grep -E '(warning|error): ' "$log" | sed -e "s|^$VE_WS/src/vitamin_e/||" -e "s|^$VE_ROOT/||" | sort -u || true)
 files=$(grep -c -E '^clang-tidy' "$log" || true)
+[ "$files" -gt 0 ] || ve_die "tidy.sh: no file of $db_dir/compile_commands.json matches '$filter'"
 if [ -n "$findings" ]; then
   echo "$findings"
   echo "tidy: $(wc -l <<<"$findings") finding(s) in $files file(s) checked"
