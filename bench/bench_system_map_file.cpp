@@ -33,7 +33,7 @@ namespace {
 namespace cli = vitamin_e::cli;
 using cli::fail;
 
-const char* kUsage =
+const char* const kUsage =
     "usage: bench_system_map_file [--points N] [--keyframes K] [--repeat R] | --map FILE [--config YAML] [--repeat R]\n"
     "  --points N     synthetic map: N points (landmarks and dormant), N archived (default 100000)\n"
     "  --keyframes K  synthetic map: K indexed keyframes of 1,500 points (default 400, the relocalizer's maximum)\n"
@@ -62,8 +62,8 @@ ve::map::MapFileContents syntheticMap(std::size_t points, std::size_t indexed_ke
   for (std::size_t k = 0; k < window; ++k) {
     ve::map::Keyframe kf;
     kf.frame_index = 10000 + 10 * k;
-    kf.timestamp = 100.0 + k;
-    kf.T_w_c.translation() = Eigen::Vector3d(0.1 * k, 0.0, 0.0);
+    kf.timestamp = 100.0 + static_cast<double>(k);
+    kf.T_w_c.translation() = Eigen::Vector3d(0.1 * static_cast<double>(k), 0.0, 0.0);
     for (std::size_t i = 0; i < active; ++i) kf.observations.emplace(i + 1, Eigen::Vector2d(n(rng), n(rng)));
     c.map.keyframes.push_back(kf);
   }
@@ -88,7 +88,7 @@ ve::map::MapFileContents syntheticMap(std::size_t points, std::size_t indexed_ke
   for (std::size_t k = 0; k < indexed_keyframes; ++k) {
     ve::map::IndexedKeyframe kf;
     kf.frame_index = 10 * k;
-    kf.T_w_c.translation() = Eigen::Vector3d(0.01 * k, 0.0, 0.0);
+    kf.T_w_c.translation() = Eigen::Vector3d(0.01 * static_cast<double>(k), 0.0, 0.0);
     kf.points.resize(static_cast<std::size_t>(reloc.points_per_keyframe));
     for (ve::map::IndexedPoint& p : kf.points) {
       p.landmark_id = 1 + rng() % (id - 1);
@@ -154,8 +154,8 @@ int main(int argc, char** argv) {
       const auto t0 = std::chrono::steady_clock::now();
       std::string error;
       if (!ve::map::saveMapFile(c, map_path, &error)) fail(error);
-      std::printf("%s: %.1f MB, written in %.0f ms\n", ve::map::mapFileHeader(c).c_str(), fs::file_size(map_path) / 1e6,
-                  ve::elapsedMs(t0));
+      std::printf("%s: %.1f MB, written in %.0f ms\n", ve::map::mapFileHeader(c).c_str(),
+                  static_cast<double>(fs::file_size(map_path)) / 1e6, ve::elapsedMs(t0));
       report("synthetic map", timeLoads(map_path, config, repeat));
       // Where System::loadMap's time goes.
       const auto t1 = std::chrono::steady_clock::now();
@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
     } else {
       const ve::map::MapFileContents c = ve::map::loadMapFile(map_path);
       std::printf("%s: %s, %.1f MB\n", map_path.c_str(), ve::map::mapFileHeader(c).c_str(),
-                  fs::file_size(map_path) / 1e6);
+                  static_cast<double>(fs::file_size(map_path)) / 1e6);
       report(map_path, timeLoads(map_path, config, repeat));
       // Round trip: loaded into a system and saved again, the same bytes.
       ve::pipeline::System system(config, c.camera);

@@ -199,7 +199,7 @@ double median(std::vector<double> v) { return vitamin_e::percentile(std::move(v)
 
 }  // namespace
 
-const char* kUsage =
+const char* const kUsage =
     "usage: bench_tracking_render RENDER_DIR [options]\n"
     "  RENDER_DIR   a render of render_sequence.py (scene.json, mav0/cam0, ground truth)\n"
     "  --start K    skip the first K frames          --frames N   use at most N frames\n"
@@ -265,13 +265,15 @@ int main(int argc, char** argv) try {
   cam.h = cam.cam.height();
   const Scene scene = loadScene(dir + "/scene.json");
   std::vector<Frame> frames = loadFrames(dir);
-  frames.erase(frames.begin(), frames.begin() + std::min<size_t>(frames.size(), std::max(0, start_frame)));
+  frames.erase(frames.begin(),
+               frames.begin() + static_cast<std::ptrdiff_t>(std::min<size_t>(frames.size(), std::max(0, start_frame))));
   if (static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
   if (frames.size() < 2) {
     std::fprintf(stderr, "need >= 2 frames with ground truth\n");
     return 2;
   }
   std::vector<cv::Mat> images;
+  images.reserve(frames.size());
   for (const Frame& f : frames) images.push_back(cv::imread(f.file, cv::IMREAD_GRAYSCALE));
 
   // ---- dense curvature-extrema tracker ----
@@ -292,7 +294,7 @@ int main(int argc, char** argv) try {
     const double c0 = vitamin_e::processCpuMs();
     const vt::TrackerFrame tf = tracker.track(images[k], std::stod(frames[k].ns) * 1e-9);
     const double ms = vitamin_e::elapsedMs(t0);
-    ours.points.push_back(tf.points.size());
+    ours.points.push_back(static_cast<double>(tf.points.size()));
     ours.ms.push_back(ms);
     ours.cpu.push_back(vitamin_e::processCpuMs() - c0);
     for (const auto& kv : tf.timing_ms) stage[kv.first].push_back(kv.second);
@@ -352,7 +354,7 @@ int main(int argc, char** argv) try {
     }
     if (per_frame && k > 0) {
       std::fprintf(stderr, "  steps checked %ld within 1 px %.4f median error %.3f px\n", frame_checked,
-                   frame_checked ? static_cast<double>(frame_inliers) / frame_checked : 0.0,
+                   frame_checked ? static_cast<double>(frame_inliers) / static_cast<double>(frame_checked) : 0.0,
                    frame_err.empty() ? 0.0 : median(frame_err));
     }
     prev.swap(cur);
@@ -383,7 +385,8 @@ int main(int argc, char** argv) try {
       size_t j = 0;
       for (size_t i = 0; i < pts.size(); ++i) {
         const cv::Point2f q = next[i];
-        if (!st[i] || q.x < 0 || q.y < 0 || q.x > cam.w - 1 || q.y > cam.h - 1) {
+        if (!st[i] || q.x < 0 || q.y < 0 || q.x > static_cast<float>(cam.w - 1) ||
+            q.y > static_cast<float>(cam.h - 1)) {
           klt_life.push_back(ages[i] + 1);
           continue;
         }
@@ -409,7 +412,7 @@ int main(int argc, char** argv) try {
     }
     klt.ms.push_back(vitamin_e::elapsedMs(t0));
     klt.cpu.push_back(vitamin_e::processCpuMs() - c0);
-    klt.points.push_back(next.size());
+    klt.points.push_back(static_cast<double>(next.size()));
     for (size_t i = 0; i < n_tracked; ++i) {
       Eigen::Vector2d truth;
       if (!reproject(cam, scene, frames[k - 1], frames[k], Eigen::Vector2d(from[i].x, from[i].y), &truth)) continue;
@@ -439,8 +442,8 @@ int main(int argc, char** argv) try {
   }
 
   auto pct = [](std::vector<double> v, double p) { return vitamin_e::percentile(std::move(v), p); };
-  const double our_ratio = ours.checked ? static_cast<double>(ours.inliers) / ours.checked : 0.0;
-  const double klt_ratio = klt.checked ? static_cast<double>(klt.inliers) / klt.checked : 0.0;
+  const double our_ratio = ours.checked ? static_cast<double>(ours.inliers) / static_cast<double>(ours.checked) : 0.0;
+  const double klt_ratio = klt.checked ? static_cast<double>(klt.inliers) / static_cast<double>(klt.checked) : 0.0;
   std::printf("render %s, %zu frames, 752x480, tracker threads=%d\n", dir.c_str(), frames.size(), cfg.threads);
   std::printf("%-34s %14s %14s\n", "", "curv.extrema", "OpenCV KLT");
   std::printf("%-34s %14.0f %14.0f\n", "points/frame median", median(ours.points), median(klt.points));
@@ -457,17 +460,19 @@ int main(int argc, char** argv) try {
   std::printf("%-34s %14.4f %14.4f\n", "track steps within 1 px", our_ratio, klt_ratio);
   std::printf("%-34s %14ld %14ld\n", "track steps checked", ours.checked, klt.checked);
   std::printf("%-34s %14.4f %14.4f\n", "after 10 frames within 1 px",
-              ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
-              klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
+              ours.drift_checked ? (double)ours.drift_inliers / (double)ours.drift_checked : 0.0,
+              klt.drift_checked ? (double)klt.drift_inliers / (double)klt.drift_checked : 0.0);
   std::printf("%-34s %14.3f %14.3f\n", "after 10 frames median error px", median(ours.drift_err),
               median(klt.drift_err));
   std::printf("%-34s %14ld %14ld\n", "tracks reaching 10 frames", ours.drift_checked, klt.drift_checked);
   std::printf("%-34s %14.3f %14s\n", "flow_ok fraction",
-              flow_ok_pf.empty() ? 0.0 : std::accumulate(flow_ok_pf.begin(), flow_ok_pf.end(), 0.0) / flow_ok_pf.size(),
+              flow_ok_pf.empty()
+                  ? 0.0
+                  : std::accumulate(flow_ok_pf.begin(), flow_ok_pf.end(), 0.0) / static_cast<double>(flow_ok_pf.size()),
               "");
-  std::printf("%-34s %.3f %.3f %.3f %.3f %.3f\n", "error <.25 <.5 <1 <2 >=2 px", hist[0] / (double)ours.checked,
-              hist[1] / (double)ours.checked, hist[2] / (double)ours.checked, hist[3] / (double)ours.checked,
-              hist[4] / (double)ours.checked);
+  std::printf("%-34s %.3f %.3f %.3f %.3f %.3f\n", "error <.25 <.5 <1 <2 >=2 px", (double)hist[0] / (double)ours.checked,
+              (double)hist[1] / (double)ours.checked, (double)hist[2] / (double)ours.checked,
+              (double)hist[3] / (double)ours.checked, (double)hist[4] / (double)ours.checked);
   for (const auto& kv : lost_by) {
     std::printf("  lost by %-24s %8ld (%ld of them new)\n", kv.first.c_str(), kv.second, lost_new_by[kv.first]);
   }

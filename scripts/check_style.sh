@@ -4,8 +4,9 @@
 # BASE: a commit or branch; default: the merge-base of HEAD with origin/main (or main).
 # Changed = differs from BASE in the working tree (committed or not), or new and untracked.
 #   1. clang-format --dry-run -Werror with .clang-format
-#   2. clang-tidy with .clang-tidy (readability-identifier-naming only), compile flags from
-#      the build's compile_commands.json (./scripts/build.sh writes it)
+#   2. clang-tidy with .clang-tidy (naming, bugprone-*, performance-*), compile flags from
+#      the build's compile_commands.json (./scripts/build.sh writes it); scripts/tidy.sh runs
+#      the same checks on the whole tree
 # Exit 0: clean; 1: findings (listed, with the command that fixes the format); 2: cannot check.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -59,7 +60,7 @@ else
   echo "clang-format: OK"
 fi
 
-# 2. Naming. Files in the compile database are checked with their own flags; headers and
+# 2. clang-tidy. Files in the compile database are checked with their own flags; headers and
 # files it lacks borrow the flags of the nearest entry (same directory, else the first).
 db_dir="$VE_WS/build"
 [ -f "$db_dir/compile_commands.json" ] ||
@@ -89,7 +90,7 @@ if target.endswith((".h", ".hpp")): out = ["-x", "c++"] + out
 print("\n".join(out))
 EOF
 }
-naming=0
+tidy=0
 for f in "${files[@]}"; do
   mapfile -t flags < <(flags_for "$f")
   tidy_failed=0
@@ -98,18 +99,18 @@ for f in "${files[@]}"; do
   if grep -q -E '(warning|error):' "$tidy_log"; then
     grep -E '(warning|error):' "$tidy_log" | sed "s|^$VE_ROOT/||" | sed 's/^/    /'
     n=$(grep -c -E '(warning|error):' "$tidy_log" || true)
-    naming=$((naming + n))
+    tidy=$((tidy + n))
     echo "clang-tidy: $f: $n finding(s)"
   elif [ "$tidy_failed" = 1 ]; then
     cat "$tidy_log" >&2
     ve_die "clang-tidy failed on $f without a diagnostic"
   fi
 done
-if [ "$naming" -gt 0 ]; then
-  findings=$((findings + naming))
-  echo "clang-tidy naming: $naming finding(s) (conventions: .clang-tidy)"
+if [ "$tidy" -gt 0 ]; then
+  findings=$((findings + tidy))
+  echo "clang-tidy: $tidy finding(s) (checks and conventions: .clang-tidy)"
 else
-  echo "clang-tidy naming: OK"
+  echo "clang-tidy: OK"
 fi
 
 if [ "$findings" -gt 0 ]; then

@@ -104,14 +104,14 @@ class ArgParser {
   }
   [[noreturn]] void unknown() const {
     const std::string& a = current();
-    fail(a.rfind("-", 0) == 0 ? "unknown option '" + a + "' (see --help)"
+    fail(a.rfind('-', 0) == 0 ? "unknown option '" + a + "' (see --help)"
                               : "unexpected argument '" + a + "' (see --help)");
   }
 
  private:
   const std::string& current() const {
-    static const std::string kNone;
-    if (i_ >= argc_) return kNone;
+    static const std::string no_argument;
+    if (i_ >= argc_) return no_argument;
     current_ = argv_[i_];
     return current_;
   }

@@ -21,7 +21,7 @@ namespace ve = vitamin_e::eval;
 
 namespace {
 
-const char* kUsage =
+const char* const kUsage =
     "usage: vitamin_e_evaluate TRAJ GT [--frames N] [--max-dt S] [--body-to-camera SENSOR_YAML]\n"
     "                          [--se3] [--rpe-delta S] [--kitti-times FILE] [--json] [--aligned-out FILE]\n"
     "                          [--gt-out FILE] [--errors-out FILE] [--alignment-from TRAJ0 [--alignment-gt GT0]]\n"
@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
     // turned into the camera's with the dataset's own T_BS.
     const std::string forced_body_to_camera = body_to_camera;
     std::string gt_path;
-    auto readGroundTruth = [&](const std::string& arg) {
+    auto read_ground_truth = [&](const std::string& arg) {
       const std::string path = ve::resolveTrajectoryPath(arg);
       ve::Trajectory gt = ve::readTrajectory(path, gt_options);
       if (gt.empty()) fail(path + ": empty ground truth (no poses)");
@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
     if (!alignment_from.empty()) {
       const ve::Trajectory est0 = ve::readTrajectory(alignment_from);
       if (est0.empty()) fail(alignment_from + ": empty trajectory (no poses)");
-      const ve::Trajectory gt0 = readGroundTruth(alignment_gt.empty() ? positional[1] : alignment_gt);
+      const ve::Trajectory gt0 = read_ground_truth(alignment_gt.empty() ? positional[1] : alignment_gt);
       ve::EvalConfig cfg0 = cfg;
       cfg0.frames = 0;
       const ve::EvalResult r0 = ve::evaluate(est0, gt0, cfg0);
@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
                   << 100.0 * r0.ate.rmse << " cm over " << r0.matched << " poses), applied unchanged\n";
       }
     }
-    const ve::Trajectory gt = readGroundTruth(positional[1]);
+    const ve::Trajectory gt = read_ground_truth(positional[1]);
     const ve::EvalResult r = ve::evaluate(est, gt, cfg);
     if (!aligned_out.empty()) ve::writeTum(aligned_out, r.aligned);
     if (!gt_out.empty()) ve::writeTum(gt_out, gt);

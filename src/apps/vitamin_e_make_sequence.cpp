@@ -17,7 +17,7 @@
 
 namespace {
 
-const char* kUsage =
+const char* const kUsage =
     "usage: vitamin_e_make_sequence --out DIR [--scene room|street] [--path turn|fast|drive]\n"
     "           [--frames N] [--rate-hz HZ] [--width W --height H] [--seed S] [--speed M_PER_S]\n"
     "           [--noise SIGMA] [--distortion euroc|none] [--supersample S] [--texel M] [--boxes N]\n"
@@ -40,10 +40,10 @@ const char* kUsage =
     "  --boxes N          room only: number of boxes in the room (default 6)\n";
 
 using vitamin_e::cli::fail;
-const auto number = vitamin_e::cli::parseDouble;
+using vitamin_e::cli::parseDouble;
 
 int integer(const std::string& key, const std::string& v) {
-  const double d = number(key, v);
+  const double d = parseDouble(key, v);
   if (d != static_cast<double>(static_cast<long long>(d)) || std::abs(d) > 2e9)
     fail(key + " expects an integer, got '" + v + "'");
   return static_cast<int>(d);
@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   }
   vitamin_e::synth::SequenceConfig cfg = vitamin_e::synth::defaultSequenceConfig(scene);
   const bool street = scene == "street";
-  auto roomOnly = [&](const std::string& key) {
+  auto room_only = [&](const std::string& key) {
     if (street) fail(key + " applies to the room scene only");
   };
   std::string out;
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
     } else if (a == "--frames") {
       cfg.frames = integer(a, next());
     } else if (a == "--rate-hz") {
-      cfg.rate_hz = number(a, next());
+      cfg.rate_hz = parseDouble(a, next());
     } else if (a == "--width") {
       cfg.width = integer(a, next());
     } else if (a == "--height") {
@@ -102,13 +102,13 @@ int main(int argc, char** argv) {
       if (s < 0) fail("--seed must be >= 0");
       cfg.seed = static_cast<std::uint64_t>(s);
     } else if (a == "--speed") {
-      roomOnly(a);
-      cfg.speed = number(a, next());
+      room_only(a);
+      cfg.speed = parseDouble(a, next());
     } else if (a == "--noise") {
-      cfg.noise_sigma = number(a, next());
+      cfg.noise_sigma = parseDouble(a, next());
     } else if (a == "--distortion") {
       const std::string d = next();
-      if (d == "euroc") roomOnly("--distortion euroc");
+      if (d == "euroc") room_only("--distortion euroc");
       if (d == "euroc") {
         cfg.distortion = true;
       } else if (d == "none") {
@@ -119,9 +119,9 @@ int main(int argc, char** argv) {
     } else if (a == "--supersample") {
       cfg.supersample = integer(a, next());
     } else if (a == "--texel") {
-      cfg.texel_m = number(a, next());
+      cfg.texel_m = parseDouble(a, next());
     } else if (a == "--boxes") {
-      roomOnly(a);
+      room_only(a);
       cfg.num_boxes = integer(a, next());
     } else {
       fail("unknown argument '" + a + "' (see --help)");

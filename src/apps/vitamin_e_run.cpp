@@ -444,7 +444,7 @@ int run(const Options& o) {
   std::unique_ptr<pl::PipelinedSystem> pipelined;
   if (o.pipelined) {
     pipelined = std::make_unique<pl::PipelinedSystem>(config, calib.camera, pl::PipelinedOptions{},
-                                                      [&](pl::FrameResult r) { handle_result(r); });
+                                                      [&](const pl::FrameResult& r) { handle_result(r); });
   }
   if (!o.load_map.empty()) {
     // Before the first frame: the system starts relocalizing in the loaded map.

@@ -27,7 +27,7 @@ std::string readText(const std::string& path) {
 
 // OpenCV FileStorage yaml ("%YAML:1.0" directive, "!!opencv-matrix" tags) made
 // readable by yaml-cpp: drop the directive line and the tags.
-std::string sanitizeOpenCvYaml(std::string text) {
+std::string sanitizeOpenCvYaml(const std::string& text) {
   std::istringstream in(text);
   std::ostringstream out;
   std::string line;

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <fstream>
+#include <string_view>
 
 namespace vitamin_e {
 
@@ -110,9 +111,9 @@ BinaryFileContents readBinaryFile(const std::string& path, const std::string& ma
   if (data.compare(0, magic.size(), magic) != 0) {
     throw BinaryFileError(what + ": not a vitamin_e " + kind + " file (it does not start with '" + magic + "')");
   }
-  const void* nl = std::memchr(data.data(), '\n', std::min<std::size_t>(data.size(), 4097));
-  const std::size_t eol = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - data.data()) : 0;
-  if (!nl) throw BinaryFileError(what + ": truncated or damaged header line");
+  // The header line ends within the first 4097 bytes.
+  const std::size_t eol = std::string_view(data.data(), std::min<std::size_t>(data.size(), 4097)).find('\n');
+  if (eol == std::string_view::npos) throw BinaryFileError(what + ": truncated or damaged header line");
   BinaryFileContents out;
   out.header_line = data.substr(0, eol);
   int found = 0;

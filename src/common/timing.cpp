@@ -39,7 +39,7 @@ double percentile(std::vector<double> values, double pct) {
 
 double upperMedian(std::vector<double> values) {
   if (values.empty()) return 0.0;
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
   return values[values.size() / 2];
 }
 

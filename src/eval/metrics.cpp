@@ -85,8 +85,9 @@ EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, 
 
   Eigen::Matrix3Xd src(3, r.matched), dst(3, r.matched);
   for (std::size_t k = 0; k < r.matched; ++k) {
-    src.col(k) = estimate[r.pairs[k].first].T_w_c.translation();
-    dst.col(k) = ground_truth[r.pairs[k].second].T_w_c.translation();
+    const auto c = static_cast<Eigen::Index>(k);
+    src.col(c) = estimate[r.pairs[k].first].T_w_c.translation();
+    dst.col(c) = ground_truth[r.pairs[k].second].T_w_c.translation();
   }
   if (config.given_alignment) {
     r.alignment = *config.given_alignment;
@@ -99,10 +100,12 @@ EvalResult evaluate(const Trajectory& estimate, const Trajectory& ground_truth, 
   }
 
   r.errors.resize(r.matched);
-  for (std::size_t k = 0; k < r.matched; ++k)
-    r.errors[k] = (r.alignment.apply(Eigen::Vector3d(src.col(k))) - dst.col(k)).norm();
+  for (std::size_t k = 0; k < r.matched; ++k) {
+    const auto c = static_cast<Eigen::Index>(k);
+    r.errors[k] = (r.alignment.apply(Eigen::Vector3d(src.col(c))) - dst.col(c)).norm();
+  }
   r.ate = errorStats(r.errors);
-  for (std::size_t k = 1; k < r.matched; ++k) r.path_length_m += (dst.col(k) - dst.col(k - 1)).norm();
+  for (Eigen::Index c = 1; c < dst.cols(); ++c) r.path_length_m += (dst.col(c) - dst.col(c - 1)).norm();
 
   r.aligned = estimate;
   for (auto& sp : r.aligned) sp.T_w_c = r.alignment.apply(sp.T_w_c);

@@ -94,7 +94,7 @@ std::string firstDataLine(const std::string& path) {
   auto f = openOrThrow(path);
   std::string line;
   while (std::getline(f, line)) {
-    const std::string s = trim(line);
+    std::string s = trim(line);
     if (s.empty() || s[0] == '#' || s[0] == '%') continue;
     return s;
   }
@@ -129,7 +129,7 @@ std::string resolveTrajectoryPath(const std::string& path) {
   if (!isDirectory(path)) return path;
   for (const char* rel : {"groundtruth_cam0_tum.txt", "mav0/state_groundtruth_estimate0/data.csv",
                           "state_groundtruth_estimate0/data.csv", "groundtruth.txt"}) {
-    const std::string p = (std::filesystem::path(path) / rel).lexically_normal().string();
+    std::string p = (std::filesystem::path(path) / rel).lexically_normal().string();
     if (fileExists(p) && !isDirectory(p)) return p;
   }
   throw TrajectoryError(path + ": folder without a ground-truth file (groundtruth_cam0_tum.txt, "

@@ -51,7 +51,7 @@ struct Table {
     // next[e]: the segment leaving the crossing on edge e (-1: none).
     std::array<int, 12> next;
     next.fill(-1);
-    auto addSegment = [&](int ea, int eb, const Eigen::Vector3d& n, int ref_corner, bool ref_outside) {
+    auto add_segment = [&](int ea, int eb, const Eigen::Vector3d& n, int ref_corner, bool ref_outside) {
       const Eigen::Vector3d a = edgeMid(ea), b = edgeMid(eb);
       const Eigen::Vector3d left = n.cross(b - a);
       const bool ref_left = left.dot(cornerPos(ref_corner) - a) > 0.0;
@@ -73,12 +73,12 @@ struct Table {
           int ref = ring[0];
           for (int k = 0; k < 4; ++k)
             if (!inside(ring[k])) ref = ring[k];
-          addSegment(crossings[0], crossings[1], n, ref, true);
+          add_segment(crossings[0], crossings[1], n, ref, true);
         } else if (nc == 4) {  // diagonal pattern: cut off each inside corner
           for (int k = 0; k < 4; ++k) {
             if (!inside(ring[k])) continue;
             const int e0 = edgeBetween(ring[(k + 3) % 4], ring[k]), e1 = edgeBetween(ring[k], ring[(k + 1) % 4]);
-            addSegment(e0, e1, n, ring[k], false);
+            add_segment(e0, e1, n, ring[k], false);
           }
         }
       }
@@ -159,7 +159,7 @@ TriangleMesh marchingCubesGrid(const std::vector<float>& values, int nx, int ny,
         int vid[12 + kMaxCentroids];
         Eigen::Vector3f pos[12];
         for (int e = 0; e < 12 + kMaxCentroids; ++e) vid[e] = -1;
-        auto edgeVertex = [&](int e) {
+        auto edge_vertex = [&](int e) {
           if (vid[e] >= 0) return;
           const int lo = kEdgeLo[e], hi = lo | (1 << (e / 4));
           const int gx = x + (lo & 1), gy = y + ((lo >> 1) & 1), gz = z + ((lo >> 2) & 1);
@@ -176,17 +176,17 @@ TriangleMesh marchingCubesGrid(const std::vector<float>& values, int nx, int ny,
         for (const std::int8_t* t = caseTriangles(mask); *t >= 0; t += 3) {
           Eigen::Vector3i f;
           for (int k = 0; k < 3; ++k) {
-            const int e = t[k];
-            if (e >= 12 && vid[e] < 0) {  // centroid of a loop: owned by this cube
+            const int e = static_cast<std::uint8_t>(t[k]);  // >= 0 in a triangle; -1 only ends the list
+            if (e >= 12 && vid[e] < 0) {                    // centroid of a loop: owned by this cube
               const std::uint16_t edges = centroidEdges(mask, e - 12);
               Eigen::Vector3f sum = Eigen::Vector3f::Zero();
               int cnt = 0;
               for (int q = 0; q < 12; ++q)
-                if (edges & (1u << q)) edgeVertex(q), sum += pos[q], ++cnt;
+                if (edges & (1u << q)) edge_vertex(q), sum += pos[q], ++cnt;
               vid[e] = static_cast<int>(mesh.vertices.size());
               mesh.vertices.push_back(sum / static_cast<float>(cnt));
             } else if (e < 12) {
-              edgeVertex(e);
+              edge_vertex(e);
             }
             f[k] = vid[e];
           }

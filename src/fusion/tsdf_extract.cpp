@@ -31,7 +31,8 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
     const int bx = x >= n, by = y >= n, bz = z >= n;
     const Block* blk = nb[bx + 2 * by + 4 * bz];
     if (!blk) return nullptr;
-    return &blk->voxels[static_cast<std::size_t>((x - bx * n) + n * ((y - by * n) + n * (z - bz * n)))];
+    const int i = (x - bx * n) + n * ((y - by * n) + n * (z - bz * n));
+    return &blk->voxels[static_cast<std::size_t>(i)];
   };
   float sdf[8];
   for (int z = 0; z < n; ++z) {
@@ -70,7 +71,7 @@ void TsdfVolume::Impl::remeshBlock(const Eigen::Vector3i& b, Block* block) const
         for (const std::int8_t* t = mc::caseTriangles(mask); *t >= 0; t += 3) {
           CachedTriangle tri;
           for (int k = 0; k < 3; ++k) {
-            const int e = t[k];
+            const int e = static_cast<std::uint8_t>(t[k]);  // >= 0 in a triangle; -1 only ends the list
             if (e < 12) {
               edge_vertex(e);
             } else if (!(done & (1 << e))) {

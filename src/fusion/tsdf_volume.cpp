@@ -249,7 +249,8 @@ const Voxel* TsdfVolume::voxelAt(const Eigen::Vector3d& p_map) const {
   const Block* block = impl_->find(b);
   if (!block) return nullptr;
   const Eigen::Vector3i l = g - b * n;
-  return &block->voxels[static_cast<std::size_t>(l.x() + n * (l.y() + n * l.z()))];
+  const int i = l.x() + n * (l.y() + n * l.z());
+  return &block->voxels[static_cast<std::size_t>(i)];
 }
 
 bool TsdfVolume::sdfAt(const Eigen::Vector3d& p_w, double* sdf) const {
@@ -267,7 +268,8 @@ void TsdfVolume::forEachVoxel(const std::function<void(const Eigen::Vector3d&, c
     for (int z = 0; z < n; ++z)
       for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
-          const Voxel& v = block->voxels[static_cast<std::size_t>(x + n * (y + n * z))];
+          const int i = x + n * (y + n * z);
+          const Voxel& v = block->voxels[static_cast<std::size_t>(i)];
           if (v.weight <= 0.0f) continue;
           const Eigen::Vector3d p_v = ((b * n + Eigen::Vector3i(x, y, z)).cast<double>().array() + 0.5).matrix() * vs;
           fn(impl_->scaling.apply(p_v), v);

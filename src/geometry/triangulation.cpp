@@ -35,7 +35,7 @@ bool triangulateDlt(const std::vector<Eigen::Isometry3d>& T_w_c, const std::vect
     Eigen::Matrix<double, 3, 4> P;
     P.leftCols<3>() = T_c_w.linear();
     P.col(3) = T_c_w.translation();
-    A.row(2 * k) = xy[k].x() * P.row(2) - P.row(0);
+    A.row(2 * static_cast<Eigen::Index>(k)) = xy[k].x() * P.row(2) - P.row(0);
     A.row(2 * k + 1) = xy[k].y() * P.row(2) - P.row(1);
   }
   // Row scaling is uniform in normalized coordinates; the 4-column SVD is tiny.

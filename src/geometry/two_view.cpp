@@ -58,7 +58,7 @@ namespace {
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + m, v.end());
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
   return v[m];
 }
 

@@ -109,12 +109,12 @@ bool parseDouble(const std::string& text, double* value) {
 
 fs::path findEurocCamFolder(const fs::path& path) {
   std::error_code ec;
-  auto looksLikeCam = [&](const fs::path& c) {
+  auto looks_like_cam = [&](const fs::path& c) {
     return fs::is_regular_file(c / "data.csv", ec) || fs::is_directory(c / "data", ec) ||
            fs::is_regular_file(c / "sensor.yaml", ec);
   };
-  if (looksLikeCam(path / "mav0" / "cam0")) return path / "mav0" / "cam0";
-  if (fs::is_directory(path / "cam0", ec) && looksLikeCam(path / "cam0")) return path / "cam0";
+  if (looks_like_cam(path / "mav0" / "cam0")) return path / "mav0" / "cam0";
+  if (fs::is_directory(path / "cam0", ec) && looks_like_cam(path / "cam0")) return path / "cam0";
   // The cam0 folder itself: data.csv, or data/ with sensor.yaml.
   if (fs::is_regular_file(path / "data.csv", ec) ||
       (fs::is_directory(path / "data", ec) && fs::is_regular_file(path / "sensor.yaml", ec))) {

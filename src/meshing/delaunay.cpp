@@ -189,7 +189,7 @@ std::vector<Eigen::Vector3i> delaunayTriangulate(const std::vector<Eigen::Vector
   Triangulator tri(std::move(pts));
   tri.run(order, n);
   const auto& tris = tri.tris();
-  out.reserve(2 * n);
+  out.reserve(2 * static_cast<std::size_t>(n));
   for (int t = 0; t < static_cast<int>(tris.size()); ++t) {
     if (!tri.alive(t)) continue;
     const auto& v = tris[t].v;

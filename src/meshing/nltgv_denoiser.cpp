@@ -62,7 +62,7 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
     for (const auto& v : V)
       if (v.measured_inv_depth > 0.0 && std::isfinite(v.measured_inv_depth)) m.push_back(v.measured_inv_depth);
     if (!m.empty()) {
-      std::nth_element(m.begin(), m.begin() + m.size() / 2, m.end());
+      std::nth_element(m.begin(), m.begin() + static_cast<std::ptrdiff_t>(m.size() / 2), m.end());
       unit = m[m.size() / 2];
     }
   }
@@ -98,7 +98,7 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
   for (int i = 0; i < n; ++i) {
     ring.assign(1, z[i]);
     for (int k = deg[i]; k < deg[i + 1]; ++k) ring.push_back(z[adj[k]]);
-    std::nth_element(ring.begin(), ring.begin() + ring.size() / 2, ring.end());
+    std::nth_element(ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(ring.size() / 2), ring.end());
     zmed[i] = ring[ring.size() / 2];
   }
   // 1-ring least-squares gradient of the median-filtered data (per normalized coordinate).

@@ -66,9 +66,9 @@ int solveBlockPcg(const BlockMatrix6& A, const Blocks& b, int max_iterations, do
       Ap[i].setZero();
       for (int l = 0; l < n; ++l) Ap[i].noalias() += A.at(i, l) * p[l];
     }
-    const double pAp = dot(p, Ap);
-    if (!(pAp > 0.0)) break;
-    const double alpha = rz / pAp;
+    const double p_A_p = dot(p, Ap);
+    if (!(p_A_p > 0.0)) break;
+    const double alpha = rz / p_A_p;
     for (int i = 0; i < n; ++i) {
       (*x)[i].noalias() += alpha * p[i];
       r[i].noalias() -= alpha * Ap[i];

@@ -179,7 +179,7 @@ void SubspaceGn::run(int* sweeps, bool* converged, double* lambda_out) {
       lambda = std::max(lambda * 10.0, 1e-8);
     }
     if (!accepted) {
-      *converged = cost <= 1e-20 * std::max<size_t>(1, pt_obs_.size());
+      *converged = cost <= 1e-20 * static_cast<double>(std::max<size_t>(1, pt_obs_.size()));
       break;
     }
     if (O_.point_iterations > 0) new_cost -= refinePoints(O_.point_iterations);
@@ -359,19 +359,21 @@ void SubspaceGn::covariance(BaSummary* summary) {
   const bool with_points = O_.covariance == BaOptions::Covariance::kWithPoints;
   const int n = 6 * ncf;
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(n, n);
-  for (int i = 0; i < ncf; ++i) S.block<6, 6>(6 * i, 6 * i) = Hcc_[i];
+  for (int i = 0; i < ncf; ++i) S.block<6, 6>(6 * Eigen::Index{i}, 6 * Eigen::Index{i}) = Hcc_[i];
   for (int j = 0; j < npf; ++j) {
     Eigen::Matrix3d H = Hpp_[j];
     H.diagonal() += Eigen::Vector3d::Constant(1e-12 * (1.0 + H.trace()));
     const Eigen::Matrix3d Hi = H.inverse();
     for (int s = slot_begin_[j]; s < slot_begin_[j + 1]; ++s) {
       const int cs = slot_cam_[s];
-      if (O_.use_schur) S.block<6, 6>(6 * cs, 6 * cs).noalias() += Jc_[s].transpose() * slot_w_[s] * Jc_[s];
+      if (O_.use_schur)
+        S.block<6, 6>(6 * Eigen::Index{cs}, 6 * Eigen::Index{cs}).noalias() += Jc_[s].transpose() * slot_w_[s] * Jc_[s];
       if (!with_points) continue;
       const Matrix23d Z = Wjp_[s] * Hi;
       for (int u = slot_begin_[j]; u < slot_begin_[j + 1]; ++u) {
         const Eigen::Matrix2d M = Z * Wjp_[u].transpose();
-        S.block<6, 6>(6 * cs, 6 * slot_cam_[u]).noalias() -= Jc_[s].transpose() * M * Jc_[u];
+        S.block<6, 6>(6 * Eigen::Index{cs}, 6 * Eigen::Index{slot_cam_[u]}).noalias() -=
+            Jc_[s].transpose() * M * Jc_[u];
       }
     }
   }
@@ -383,7 +385,7 @@ void SubspaceGn::covariance(BaSummary* summary) {
   const Eigen::MatrixXd S_inv =
       eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   for (int i = 0; i < ncf; ++i) {
-    Matrix6d C = sigma2 * S_inv.block<6, 6>(6 * i, 6 * i);
+    Matrix6d C = sigma2 * S_inv.block<6, 6>(6 * Eigen::Index{i}, 6 * Eigen::Index{i});
     summary->camera_covariance[cams_[i]] = 0.5 * (C + C.transpose());
     summary->camera_covariance_valid[cams_[i]] = true;
   }

@@ -181,14 +181,15 @@ double SubspaceGn::linearize() {
         double* G = gc[ci].data();
         double* Hd = hdiag[ci].data();
         for (int l = 0; l < 6; ++l) {
-          const A2 col = C2(J + 2 * l);
+          const A2 col = C2(J + 2 * std::ptrdiff_t{l});
           G[l] += (col * wr).sum();
           Hd[l] += w * (col * col).sum();
         }
         if (Hcc) {
           Matrix6d& Hc = Hcc[ci];
           for (int l = 0; l < 6; ++l)
-            for (int k = 0; k <= l; ++k) Hc(k, l) += w * (J[2 * k] * J[2 * l] + J[2 * k + 1] * J[2 * l + 1]);
+            for (int k = 0; k <= l; ++k)
+              Hc(k, l) += w * (J[2 * std::ptrdiff_t{k}] * J[2 * std::ptrdiff_t{l}] + J[2 * k + 1] * J[2 * l + 1]);
         }
       }
       block.sum(&Hpp_[j], &gp_[j]);

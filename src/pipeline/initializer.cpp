@@ -89,7 +89,7 @@ InitAttempt Initializer::addFrame(const FrameContext& frame, const MapAnchor& an
       l.id = ids[i];
       l.p_w = T_w_c0 * (anchor.scale * tv.points_c0[i]);
       l.intensity = t == track_of.end() ? 0 : t->second->intensity;
-      l.polarity = t == track_of.end() ? 0 : t->second->polarity;
+      l.polarity = t == track_of.end() ? std::int8_t{0} : t->second->polarity;
       l.seen_frame = frame.frame_index;
       m.landmarks.push_back(l);
     }

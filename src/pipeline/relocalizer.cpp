@@ -156,9 +156,12 @@ std::vector<std::size_t> Relocalizer::spread(const FrameContext& frame, const st
   std::vector<std::vector<std::size_t>> cells(static_cast<std::size_t>(cells_x * cells_y));
   for (std::size_t i : idx) {
     const Eigen::Vector2f& uv = frame.tracks[i].uv;
-    const int cx = std::clamp(static_cast<int>(uv.x() * cells_x / camera_.width()), 0, cells_x - 1);
-    const int cy = std::clamp(static_cast<int>(uv.y() * cells_y / camera_.height()), 0, cells_y - 1);
-    cells[static_cast<std::size_t>(cy * cells_x + cx)].push_back(i);
+    const int cx = std::clamp(
+        static_cast<int>(uv.x() * static_cast<float>(cells_x) / static_cast<float>(camera_.width())), 0, cells_x - 1);
+    const int cy = std::clamp(
+        static_cast<int>(uv.y() * static_cast<float>(cells_y) / static_cast<float>(camera_.height())), 0, cells_y - 1);
+    const int cell = cy * cells_x + cx;
+    cells[static_cast<std::size_t>(cell)].push_back(i);
   }
   std::vector<std::size_t> out;
   out.reserve(static_cast<std::size_t>(max_count));

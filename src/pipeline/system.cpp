@@ -230,7 +230,7 @@ Eigen::Isometry3d System::Impl::localizeInitialFrames(const InitialMap& m, const
     recordPose(f.timestamp, f.timestamp_text, e.T_w_c);
     guess = e.T_w_c;
   }
-  const Eigen::Isometry3d T_w_c = map.keyframes().back().T_w_c;
+  Eigen::Isometry3d T_w_c = map.keyframes().back().T_w_c;
   if (counters.first_init_frame < 0) counters.first_init_frame = static_cast<long long>(frame.frame_index);
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   // Motion model from the last localized in-between frame, if any.
@@ -435,7 +435,7 @@ Eigen::Isometry3d System::Impl::insertKeyframe(const FrameContext& frame, const 
   d->triangulation_rejected_by = std::move(made.rejected_by);
   applyUpdate(mapper.optimizeWindow(map));
   // The window BA moved the new keyframe: the frame's pose is the keyframe's.
-  const Eigen::Isometry3d T_w_kf = map.keyframes().back().T_w_c;
+  Eigen::Isometry3d T_w_kf = map.keyframes().back().T_w_c;
   motion.correctLast(T_w_kf);
   if (!trajectory.empty()) trajectory.back().T_w_c = T_w_kf;
   relocalizer.addKeyframe(frame.image, frame, map, T_w_kf);

@@ -125,7 +125,7 @@ const vitamin_e::camera::CameraCalibration& BagDataset::calibration() const { re
 const std::string& BagDataset::topic() const { return impl_->topic; }
 
 cv::Mat BagDataset::loadImage(std::size_t i) const {
-  const cv::Mat gray = toGray(*impl_->read(i), impl_->frameName(i));
+  cv::Mat gray = toGray(*impl_->read(i), impl_->frameName(i));
   const auto& cam = impl_->calibration.camera;
   if (gray.cols != cam.width() || gray.rows != cam.height()) {
     throw DatasetError(impl_->frameName(i) + " is " + std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +

@@ -93,7 +93,7 @@ DrivePath::DrivePath(const DrivePathConfig& config) : config_(config) {
   }
   // The last step overshoots: the end time by linear interpolation in it.
   const std::size_t m = s_of_t_.size() - 1;
-  duration_ = dt_ * ((m - 1) + (length_ - s_of_t_[m - 1]) / (s_of_t_[m] - s_of_t_[m - 1]));
+  duration_ = dt_ * (static_cast<double>(m - 1) + (length_ - s_of_t_[m - 1]) / (s_of_t_[m] - s_of_t_[m - 1]));
 }
 
 int DrivePath::legAt(double s) const {

@@ -27,7 +27,8 @@ Renderer::Renderer(const Scene& scene, const camera::Camera& camera, int supersa
           const Eigen::Vector2d uv(u + (j + 0.5) / ss_ - 0.5, v + (i + 0.5) / ss_ - 0.5);
           Eigen::Vector3d bs = b;
           if (ss_ > 1 && !camera_.unproject(uv, &bs)) bs = b;
-          rays_c_[(static_cast<std::size_t>(v) * w + u) * ss_ * ss_ + i * ss_ + j] = bs.normalized().cast<float>();
+          rays_c_[(static_cast<std::size_t>(v) * w + u) * ss_ * ss_ + static_cast<std::size_t>(i) * ss_ + j] =
+              bs.normalized().cast<float>();
         }
       }
     }

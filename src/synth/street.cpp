@@ -234,7 +234,7 @@ Scene makeStreetScene(const StreetConfig& cfg, const DrivePath& path) {
       town.cells.push_back(c);
     }
   }
-  auto isStreet = [&](double x, double y) {
+  auto is_street = [&](double x, double y) {
     const Cell* c = town.cellAt(x, y);
     return c && c->kind != CellKind::kBlock;
   };
@@ -398,7 +398,8 @@ Scene makeStreetScene(const StreetConfig& cfg, const DrivePath& path) {
         // Bound the memory of one face (16 M texels).
         const double area = (f.hi - f.lo).prod();
         texel = std::max(texel, std::sqrt(area / 16e6));
-        Rng rng(mixSeed(cfg.seed, 0x7E47 + k, static_cast<std::uint64_t>(2 * axis + side)));
+        const int face = 2 * axis + side;
+        Rng rng(mixSeed(cfg.seed, 0x7E47 + k, static_cast<std::uint64_t>(face)));
         // Vertical faces: canonical rows run up z, which is u (columns) on an axis-1 face.
         // Top faces: canonical columns run along `along`, which is u (x) unless along = y.
         const bool vertical = axis != 2;
@@ -415,8 +416,8 @@ Scene makeStreetScene(const StreetConfig& cfg, const DrivePath& path) {
             // A street face has windows; a face onto the block's inside or a neighbour is a plain wall.
             Eigen::Vector3d out = 0.5 * (it.box.min + it.box.max);
             out[axis] = f.plane + sign * 0.5;
-            img = isStreet(out.x(), out.y()) ? detail::facadeTexture(along_m, across_m, texel, &rng)
-                                             : detail::plainWallTexture(along_m, across_m, texel, &rng);
+            img = is_street(out.x(), out.y()) ? detail::facadeTexture(along_m, across_m, texel, &rng)
+                                              : detail::plainWallTexture(along_m, across_m, texel, &rng);
             break;
           }
           case ItemKind::kCar:

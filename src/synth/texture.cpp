@@ -56,7 +56,7 @@ void addValueNoise(cv::Mat* dst, double wavelength_px, double amplitude, Rng* rn
 // Hard-edged shapes of size in [min_m, max_m]: discs, rotated rectangles, strokes.
 void addShapes(cv::Mat* dst, double texel_m, double min_m, double max_m, double per_m2, double amplitude, Rng* rng) {
   const double area = dst->cols * texel_m * dst->rows * texel_m;
-  const int n = static_cast<int>(per_m2 * area + 0.5);
+  const int n = static_cast<int>(std::floor(per_m2 * area + 0.5));
   for (int k = 0; k < n; ++k) {
     const cv::Point2f c(static_cast<float>(rng->uniform(0, dst->cols)), static_cast<float>(rng->uniform(0, dst->rows)));
     // Log-uniform size: as many small shapes per octave of size as large ones.
@@ -123,7 +123,7 @@ cv::Mat generateProceduralTexture(int width, int height, double texel_m, std::ui
   return tex;
 }
 
-Texture::Texture(cv::Mat level0, double texel_m) : texel_m_(texel_m) {
+Texture::Texture(const cv::Mat& level0, double texel_m) : texel_m_(texel_m) {
   CV_Assert(level0.type() == CV_32FC1 && !level0.empty() && texel_m > 0.0);
   cv::Mat cur = level0;
   for (;;) {

@@ -132,7 +132,7 @@ bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const Cl
   if (x < xmin || x > xmax || y < ymin || y > ymax) return false;
   const float px = prediction.x(), py = prediction.y();
   auto F = [&](int xx, int yy) {
-    const float dx = xx - px, dy = yy - py;
+    const float dx = static_cast<float>(xx) - px, dy = static_cast<float>(yy) - py;
     const float d2 = dx * dx + dy * dy;
     return p.sign * kappa.ptr<float>(yy)[xx] + p.lambda * (p.sigma2 / (d2 + p.sigma2));
   };
@@ -197,7 +197,7 @@ Eigen::Vector2f refineSubpixel(const cv::Mat& kappa, const Eigen::Vector2i& p, f
     const float q = c + gx * ox + gy * oy + 0.5f * (hxx * ox * ox + 2.f * hxy * ox * oy + hyy * oy * oy);
     *peak = std::max(c, q);  // never below the sample itself
   }
-  return Eigen::Vector2f(x + ox, y + oy);
+  return Eigen::Vector2f(static_cast<float>(x) + ox, static_cast<float>(y) + oy);
 }
 
 float peakSharpness(const cv::Mat& kappa, const Eigen::Vector2i& p, float sign) {
@@ -223,7 +223,7 @@ float sampleBilinear(const cv::Mat& img, float x, float y) {
   const int x0 = std::min(static_cast<int>(x), img.cols - 2 < 0 ? 0 : img.cols - 2);
   const int y0 = std::min(static_cast<int>(y), img.rows - 2 < 0 ? 0 : img.rows - 2);
   const int x1 = std::min(x0 + 1, img.cols - 1), y1 = std::min(y0 + 1, img.rows - 1);
-  const float ax = x - x0, ay = y - y0;
+  const float ax = x - static_cast<float>(x0), ay = y - static_cast<float>(y0);
   const float* r0 = img.ptr<float>(y0);
   const float* r1 = img.ptr<float>(y1);
   return (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x1]);

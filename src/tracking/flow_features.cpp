@@ -56,12 +56,12 @@ double noiseToGradientRatio(const cv::Mat& g, std::vector<float>* grad) {
           (a[x - 1] - 2 * a[x] + a[x + 1]) - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) + (c[x - 1] - 2 * c[x] + c[x + 1]);
       sum += std::abs(lap);
       ++n;
-      const float gx = 0.5f * (b[x + 1] - b[x - 1]), gy = 0.5f * (c[x] - a[x]);
+      const float gx = 0.5f * static_cast<float>(b[x + 1] - b[x - 1]), gy = 0.5f * static_cast<float>(c[x] - a[x]);
       grad->push_back(std::sqrt(gx * gx + gy * gy));
     }
   }
   if (n == 0) return 0.0;
-  const double noise = std::sqrt(M_PI / 2.0) / 6.0 * sum / n;
+  const double noise = std::sqrt(M_PI / 2.0) / 6.0 * sum / static_cast<double>(n);
   auto mid = grad->begin() + static_cast<long>(grad->size() / 2);
   std::nth_element(grad->begin(), mid, grad->end());
   return *mid > 1e-6f ? noise / *mid : 0.0;

@@ -34,13 +34,13 @@ bool alignPatch(const cv::Mat& prev, const cv::Mat& cur, const Eigen::Vector2f& 
   if (prev.type() != CV_32FC1 || cur.type() != CV_32FC1) return false;
   const int n = 2 * r + 1, m = n + 2;
   float grid[kMaxSide * kMaxSide];
-  if (!sampleGrid(prev, p0.x() - r - 1, p0.y() - r - 1, m, grid)) return false;
+  if (!sampleGrid(prev, p0.x() - static_cast<float>(r) - 1, p0.y() - static_cast<float>(r) - 1, m, grid)) return false;
   // Template, its zero-mean gradients and the 2x2 normal matrix.
   float T[kMaxSide * kMaxSide], gx[kMaxSide * kMaxSide], gy[kMaxSide * kMaxSide];
   float mt = 0, mgx = 0, mgy = 0;
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
-      const float* c = grid + (j + 1) * m + (i + 1);
+      const float* c = grid + std::ptrdiff_t{j + 1} * m + (i + 1);
       const int k = j * n + i;
       T[k] = c[0];
       gx[k] = 0.5f * (c[1] - c[-1]);
@@ -51,9 +51,9 @@ bool alignPatch(const cv::Mat& prev, const cv::Mat& cur, const Eigen::Vector2f& 
     }
   }
   const int N = n * n;
-  mt /= N;
-  mgx /= N;
-  mgy /= N;
+  mt /= static_cast<float>(N);
+  mgx /= static_cast<float>(N);
+  mgy /= static_cast<float>(N);
   float hxx = 0, hxy = 0, hyy = 0, stt = 0, stx = 0, sty = 0;
   for (int k = 0; k < N; ++k) {
     T[k] -= mt;
@@ -84,10 +84,10 @@ bool alignPatch(const cv::Mat& prev, const cv::Mat& cur, const Eigen::Vector2f& 
   float I[kMaxSide * kMaxSide];
   float a = 1.f;
   for (int it = 0; it < params.iterations; ++it) {
-    if (!sampleGrid(cur, q.x() - r, q.y() - r, n, I)) return false;
+    if (!sampleGrid(cur, q.x() - static_cast<float>(r), q.y() - static_cast<float>(r), n, I)) return false;
     float mi = 0;
     for (int k = 0; k < N; ++k) mi += I[k];
-    mi /= N;
+    mi /= static_cast<float>(N);
     float dx, dy;
     if (params.compensate_gain) {
       Eigen::Vector3f rhs = Eigen::Vector3f::Zero();

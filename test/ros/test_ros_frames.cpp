@@ -55,7 +55,7 @@ TEST(Rep105, MapToOdomCompletesTheCameraPose) {
 
   const auto poses = pose.messages();
   ASSERT_GT(poses.size(), 10u);
-  const auto last = poses.back();
+  const auto& last = poses.back();
   geometry_msgs::TransformStamped map_odom;
   bool camera_with_two_parents = false;
   ASSERT_TRUE(tf.waitFor(

@@ -301,7 +301,8 @@ TEST(MeshStream, OnlyChangedBlocksAndTheWholeMeshRecoverable) {
   const double share = static_cast<double>(sent) / static_cast<double>(whole);
   std::printf("[mesh stream] %zu messages, %.2f MB in all; after the first third %.2f MB sent of %.2f MB the whole "
               "mesh would weigh (%.2f); whole mesh at the end %.2f MB, %zu triangles\n",
-              sizes.size(), total / 1e6, sent / 1e6, whole / 1e6, share, sizes.back().whole / 1e6, held_triangles);
+              sizes.size(), static_cast<double>(total) / 1e6, static_cast<double>(sent) / 1e6,
+              static_cast<double>(whole) / 1e6, share, static_cast<double>(sizes.back().whole) / 1e6, held_triangles);
   RecordProperty("sent_share", std::to_string(share));
   EXPECT_LT(share, 0.4);  // measured 0.19 - 0.26; a stream of the whole mesh: 1
 }

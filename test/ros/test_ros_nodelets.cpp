@@ -221,7 +221,7 @@ class BadInput : public ::testing::Test {
     img.width = w;
     img.height = h;
     img.step = w * channels;
-    img.data.resize(img.step * h);
+    img.data.resize(std::size_t{img.step} * h);
     for (std::size_t i = 0; i < img.data.size(); ++i) img.data[i] = static_cast<uint8_t>((i * 7919) >> 3);
     return img;
   }

@@ -28,7 +28,7 @@ class LoaderTest : public ::testing::Test {
   fs::path dir_;
 };
 
-const char* kEurocYaml = R"(%YAML:1.0
+const char* const kEurocYaml = R"(%YAML:1.0
 # General sensor definitions.
 sensor_type: camera
 comment: VI-Sensor cam0 (MT9M034)
@@ -47,7 +47,7 @@ distortion_model: radial-tangential
 distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]
 )";
 
-const char* kKalibr = R"(cam0:
+const char* const kKalibr = R"(cam0:
   cam_overlaps: [1]
   camera_model: pinhole
   distortion_coeffs: [-0.0073, 0.0426, -0.0407, 0.0077]
@@ -68,7 +68,7 @@ cam1:
   resolution: [640, 480]
 )";
 
-const char* kRosInfo = R"(image_width: 640
+const char* const kRosInfo = R"(image_width: 640
 image_height: 480
 camera_name: narrow_stereo
 camera_matrix:
@@ -90,9 +90,10 @@ projection_matrix:
   data: [500, 0, 320, 0, 0, 500, 240, 0, 0, 0, 1, 0]
 )";
 
-const char* kKittiLabelled = "P0: 7.070912e+02 0 6.018873e+02 0 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
-                             "P1: 7.070912e+02 0 6.018873e+02 -3.798145e+02 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
-                             "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
+const char* const kKittiLabelled =
+    "P0: 7.070912e+02 0 6.018873e+02 0 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
+    "P1: 7.070912e+02 0 6.018873e+02 -3.798145e+02 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
+    "Tr: 1 0 0 0 0 1 0 0 0 0 1 0\n";
 
 }  // namespace
 

@@ -96,6 +96,7 @@ TEST(StageTimings, CopiesAndClears) {
 TEST(StageTimings, SamplesFromSeveralThreadsAreAllKept) {
   StageTimings t;
   std::vector<std::thread> threads;
+  threads.reserve(4);
   for (int k = 0; k < 4; ++k) {
     threads.emplace_back([&t, k] {
       for (int i = 0; i < 1000; ++i) t.add(k % 2 ? "mapping" : "tracking", 1.0);

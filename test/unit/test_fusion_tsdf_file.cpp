@@ -177,7 +177,8 @@ TEST(TsdfFile, OtherGridsAndDamagedFilesAreRefusedAndLeaveTheVolume) {
   std::uniform_int_distribution<std::size_t> pos(0, bytes.size() - 1);
   for (int trial = 0; trial < 60; ++trial) {
     std::string flipped = bytes;
-    flipped[pos(rng)] ^= static_cast<char>(1 << (trial % 8));
+    const std::size_t at = pos(rng);
+    flipped[at] = static_cast<char>(flipped[at] ^ static_cast<char>(1 << (trial % 8)));
     writeAll(dir.file("flip.vetsdf"), flipped);
     refused(dir.file("flip.vetsdf"), "");
     writeAll(dir.file("cut.vetsdf"), bytes.substr(0, pos(rng)));

@@ -23,6 +23,7 @@ TEST(Triangulation, RecoversKnownPointFromThreeViews) {
   const std::vector<Eigen::Isometry3d> T = {pose({0, 0, 0}, {0, 0, 0}), pose({0.5, 0, 0.1}, {0.01, -0.05, 0}),
                                             pose({1.0, 0.1, 0}, {0, -0.1, 0.02})};
   std::vector<Eigen::Vector2d> xy;
+  xy.reserve(T.size());
   for (const auto& t : T) xy.push_back(observe(t, p_w));
   TriangulationConfig cfg;
   const TriangulationResult r = triangulatePoint(T, xy, cfg);

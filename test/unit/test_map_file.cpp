@@ -27,8 +27,7 @@ namespace {
 class TempDir {
  public:
   TempDir() {
-    path_ =
-        fs::temp_directory_path() / ("ve_map_file_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
+    path_ = fs::temp_directory_path() / ("ve_map_file_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
@@ -36,7 +35,7 @@ class TempDir {
   const fs::path& path() const { return path_; }
 
  private:
-  static inline int counter_ = 0;
+  static inline int counter = 0;
   fs::path path_;
 };
 
@@ -71,17 +70,17 @@ ve::map::Map grownMap() {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int k = 0; k < 12; ++k) {
     ve::map::Keyframe kf;
-    kf.frame_index = static_cast<std::uint64_t>(10 + 5 * k);
+    kf.frame_index = 10 + 5 * static_cast<std::uint64_t>(k);
     kf.timestamp = 100.0 + 0.25 * k;
     kf.T_w_c = poseAt(0.2 * k, 0.05 * k);
     for (int i = 0; i < 60; ++i) {
-      const std::uint64_t id = static_cast<std::uint64_t>(30 * k + i + 1);
+      const std::uint64_t id = 30 * static_cast<std::uint64_t>(k) + static_cast<std::uint64_t>(i) + 1;
       kf.observations.emplace(id, Eigen::Vector2d(u(rng), u(rng)));
     }
     map.addKeyframe(kf);
     for (int i = 30; i < 60; ++i) {
       ve::map::NewLandmark l;
-      l.id = static_cast<std::uint64_t>(30 * k + i + 1);
+      l.id = 30 * static_cast<std::uint64_t>(k) + static_cast<std::uint64_t>(i) + 1;
       l.p_w = Eigen::Vector3d(u(rng), u(rng), 2.0 + u(rng));
       l.intensity = static_cast<std::uint8_t>(i * 4);
       l.polarity = i % 2 ? 1 : -1;
@@ -89,7 +88,7 @@ ve::map::Map grownMap() {
       l.prior_observations = 1;
       map.addLandmark(l);
     }
-    map.flagOutlier(static_cast<std::uint64_t>(30 * k + 45));
+    map.flagOutlier(30 * static_cast<std::uint64_t>(k) + 45);
   }
   return map;
 }
@@ -106,11 +105,11 @@ MapFileContents contentsOf(const ve::map::Map& map) {
   std::mt19937_64 rng(3);
   for (int k = 0; k < 5; ++k) {
     ve::map::IndexedKeyframe kf;
-    kf.frame_index = static_cast<std::uint64_t>(10 + 5 * k);
+    kf.frame_index = 10 + 5 * static_cast<std::uint64_t>(k);
     kf.T_w_c = poseAt(0.2 * k, 0.05 * k);
     for (int i = 0; i < 40; ++i) {
       ve::map::IndexedPoint p;
-      p.landmark_id = static_cast<std::uint64_t>(30 * k + i + 1);
+      p.landmark_id = 30 * static_cast<std::uint64_t>(k) + static_cast<std::uint64_t>(i) + 1;
       p.p_w = Eigen::Vector3d(0.01 * i, -0.02 * i, 2.0 + 0.001 * i);
       for (auto& b : p.descriptor) b = rng();
       p.polarity = i % 3 == 0 ? 1 : -1;

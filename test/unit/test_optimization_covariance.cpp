@@ -65,7 +65,7 @@ std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigm
     if (cam_col[o.camera] >= 0 || pt_col[o.point] >= 0) active.push_back(static_cast<int>(k));
   }
   const int m = static_cast<int>(active.size());
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * m, n);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * Eigen::Index{m}, n);
   Eigen::VectorXd w(2 * m);
   const double s2 = robust_sigma * robust_sigma;
   double sum_s = 0.0;
@@ -77,7 +77,7 @@ std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigm
     EXPECT_TRUE(baResidual(p, o, &r));
     const double s = r.squaredNorm();
     const double wk = s2 * s2 / ((s2 + s) * (s2 + s));
-    w(2 * a) = w(2 * a + 1) = wk;
+    w(2 * Eigen::Index{a}) = w(2 * a + 1) = wk;
     if (s < 9.0 * s2) {
       sum_s += s;
       ++m_in;
@@ -92,7 +92,7 @@ std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigm
         baResidual(q, o, &rp);
         q.cameras[o.camera].T_w_c = p.cameras[o.camera].T_w_c * geo::expSE3(-e);
         baResidual(q, o, &rm);
-        J.block<2, 1>(2 * a, cam_col[o.camera] + d) = (rp - rm) / (2 * h);
+        J.block<2, 1>(2 * Eigen::Index{a}, cam_col[o.camera] + d) = (rp - rm) / (2 * h);
       }
       q.cameras[o.camera].T_w_c = p.cameras[o.camera].T_w_c;
     }
@@ -103,7 +103,7 @@ std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigm
         baResidual(q, o, &rp);
         q.points[o.point].p_w = p.points[o.point].p_w - h * Eigen::Vector3d::Unit(d);
         baResidual(q, o, &rm);
-        J.block<2, 1>(2 * a, pt_col[o.point] + d) = (rp - rm) / (2 * h);
+        J.block<2, 1>(2 * Eigen::Index{a}, pt_col[o.point] + d) = (rp - rm) / (2 * h);
       }
     }
   }

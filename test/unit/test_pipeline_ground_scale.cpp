@@ -20,6 +20,7 @@ std::vector<Eigen::Vector3d> roadAt(double height, int seed = 1) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Eigen::Vector3d> pts;
+  pts.reserve(500);
   for (int i = 0; i < 300; ++i) pts.push_back({height * (8.0 * u(rng) - 4.0), height, height * (2.0 + 8.0 * u(rng))});
   for (int i = 0; i < 200; ++i)
     pts.push_back({height * (i % 2 ? 5.0 : -5.0), height * (1.0 - 5.0 * u(rng)), height * (2.0 + 20.0 * u(rng))});

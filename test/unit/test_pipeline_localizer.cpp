@@ -35,7 +35,7 @@ Scene makeScene(const Eigen::Isometry3d& T_w_c, int n, double bad, unsigned seed
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d xy1(0.6 * u(rng), 0.4 * u(rng), 1.0);
     ve::map::NewLandmark l;
-    l.id = static_cast<std::uint64_t>(i + 1);
+    l.id = static_cast<std::uint64_t>(i) + 1;
     l.p_w = T_w_c * (depth(rng) * xy1);
     s.map.addLandmark(l);
     ve::pipeline::FrameTrack t{};

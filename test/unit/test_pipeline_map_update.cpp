@@ -19,7 +19,8 @@ ve::map::Map makeMap(const ve::map::MapConfig& config = {}) {
     ve::map::Keyframe kf;
     kf.frame_index = f;
     kf.T_w_c.translation() = Eigen::Vector3d(0.1 * static_cast<double>(f), 0.0, 0.0);
-    for (std::uint64_t id = 1; id <= 4; ++id) kf.observations.emplace(id, Eigen::Vector2d(0.01 * id, 0.0));
+    for (std::uint64_t id = 1; id <= 4; ++id)
+      kf.observations.emplace(id, Eigen::Vector2d(0.01 * static_cast<double>(id), 0.0));
     map.addKeyframe(kf);
   }
   for (std::uint64_t id = 1; id <= 4; ++id) {

@@ -98,7 +98,7 @@ TEST(MeshBlockMarkers, UpdatesKeepAViewerEqualToTheMesh) {
     volume.integrateDepth(test::sphereDepth(c, 0.4, views[k], image), views[k], image);
     if (k % 4 != 3) continue;
     const fusion::MeshBlockUpdate update = volume.takeChangedBlocks();
-    const visualization_msgs::MarkerArray array = stream.update(update, ros::Time(1.0 + k));
+    const visualization_msgs::MarkerArray array = stream.update(update, ros::Time(1.0 + static_cast<double>(k)));
     if (k == 3) {
       ASSERT_EQ(array.markers.front().action, Marker::DELETEALL);  // the first update replaces everything
       first_ids = idsByBlock(array, update);

@@ -139,8 +139,8 @@ TEST(AffineFlow, RecoversKnownAffineWithHalfOutliers) {
   // Plain least squares would be far off: make sure the data really is hard.
   Eigen::MatrixXd H(x.size(), 3), Y(x.size(), 2);
   for (size_t i = 0; i < x.size(); ++i) {
-    H.row(i) << x[i].x(), x[i].y(), 1.0;
-    Y.row(i) = y[i].transpose();
+    H.row(static_cast<Eigen::Index>(i)) << x[i].x(), x[i].y(), 1.0;
+    Y.row(static_cast<Eigen::Index>(i)) = y[i].transpose();
   }
   const Eigen::MatrixXd P = H.colPivHouseholderQr().solve(Y);
   EXPECT_GT((P.row(2).transpose() - b).norm(), 5.0);
@@ -325,7 +325,7 @@ TEST(PatchAlign, RecoversSubpixelTranslationUnderBrightnessOffset) {
   std::vector<double> err;
   for (int y = 20; y < h - 20; y += 9) {
     for (int x = 20; x < w - 20; x += 9) {
-      const Eigen::Vector2f p0(x + 0.2f, y - 0.3f);
+      const Eigen::Vector2f p0(static_cast<float>(x) + 0.2f, static_cast<float>(y) - 0.3f);
       Eigen::Vector2f p = p0;  // start at the old position: 0.7 px off
       if (!vt::alignPatch(a, b, p0, params, &p)) continue;
       err.push_back((p.cast<double>() - (p0.cast<double>() + t)).norm());

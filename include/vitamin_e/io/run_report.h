@@ -51,7 +51,9 @@ struct RunStats {
   // the runner's wall time of process()).
   void addFrame(bool tracked, std::size_t points, std::size_t mapped,
                 const std::vector<std::pair<std::string, double>>& stage_ms, double total_ms);
-  double successRate() const { return frames ? static_cast<double>(tracked_frames) / frames : 0.0; }
+  double successRate() const {
+    return frames ? static_cast<double>(tracked_frames) / static_cast<double>(frames) : 0.0;
+  }
   // Tracked frames over all frames from the first initialization on: the share
   // of frames kept once the map exists (0 when it was never built).
   double successAfterInit() const {

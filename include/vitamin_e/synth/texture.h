@@ -35,7 +35,7 @@ class Texture {
   Texture() = default;
   // Takes a CV_32FC1 level 0 (texel (i, j) covers [j, j+1) x [i, i+1) * texel_m)
   // and builds the pyramid.
-  Texture(cv::Mat level0, double texel_m);
+  Texture(const cv::Mat& level0, double texel_m);
 
   int width() const { return levels_.empty() ? 0 : levels_[0].cols; }
   int height() const { return levels_.empty() ? 0 : levels_[0].rows; }

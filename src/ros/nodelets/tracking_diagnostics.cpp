@@ -27,7 +27,7 @@ double rateHz(const std::deque<double>& wall, double now) {
   // Events per second over the window, measured from the first event in it (a stream that
   // started less than a window ago is not under-counted).
   const double span = std::max(now - wall.front(), 1e-3);
-  return (wall.size() - 1) / std::min(span, kWindowS);
+  return static_cast<double>(wall.size() - 1) / std::min(span, kWindowS);
 }
 
 }  // namespace
@@ -49,7 +49,7 @@ void TrackingNodelet::noteReceived(const ros::Time& stamp) {
     stats_.stamp_deltas.push_back(dt);
     if (stats_.stamp_deltas.size() > 50) stats_.stamp_deltas.pop_front();
     std::vector<double> d(stats_.stamp_deltas.begin(), stats_.stamp_deltas.end());
-    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
     stats_.period_s = d[d.size() / 2];
   }
   stats_.last_stamp = t;
@@ -75,10 +75,10 @@ void TrackingNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
     latency_mean += l;
     latency_max = std::max(latency_max, l);
   }
-  if (!stats_.latency_s.empty()) latency_mean /= stats_.latency_s.size();
+  if (!stats_.latency_s.empty()) latency_mean /= static_cast<double>(stats_.latency_s.size());
   double wait_mean = 0.0;
   for (double w : stats_.queue_wait_s) wait_mean += w;
-  if (!stats_.queue_wait_s.empty()) wait_mean /= stats_.queue_wait_s.size();
+  if (!stats_.queue_wait_s.empty()) wait_mean /= static_cast<double>(stats_.queue_wait_s.size());
   const double since_input = stats_.received_wall.empty() ? 1e9 : now - stats_.received_wall.back();
   const double since_processed = stats_.processed_wall.empty() ? 1e9 : now - stats_.processed_wall.back();
 
