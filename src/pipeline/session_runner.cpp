@@ -29,7 +29,7 @@ SessionStamp SessionRunner::admit(double timestamp) {
   // A time jump may restart the tracking or replace the System (Session::reset): the
   // pipeline is emptied and stopped first, and started again on the session's System.
   pipeline_.reset();
-  const SessionStamp s = session_.admit(timestamp);
+  SessionStamp s = session_.admit(timestamp);
   startPipeline();
   return s;
 }

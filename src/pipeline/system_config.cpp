@@ -4,8 +4,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include <functional>
+#include <initializer_list>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 
 #include "config_table.h"
@@ -57,10 +59,16 @@ SystemConfig loadSystemConfig(const std::string& yaml_path) {
     }
     return key.Scalar();
   };
+  // The messages of the loops below, built without a temporary per '+'.
+  auto message = [](std::initializer_list<std::string_view> parts) {
+    std::string m;
+    for (std::string_view part : parts) m += part;
+    return m;
+  };
   for (const auto& section : root) {
     const std::string name = key_name(section.first);
     if (!section.second.IsMap()) {
-      throw ConfigError(yaml_path + ": section '" + name + "' must be a map of key: value");
+      throw ConfigError(message({yaml_path, ": section '", name, "' must be a map of key: value"}));
     }
     for (const auto& kv : section.second) {
       const std::string key = key_name(kv.first);
@@ -72,10 +80,11 @@ SystemConfig loadSystemConfig(const std::string& yaml_path) {
         }
       }
       if (!found) {
-        throw ConfigError(yaml_path + ": unknown parameter '" + name + "." + key + "' (docs/CONFIG.md lists them)");
+        throw ConfigError(
+            message({yaml_path, ": unknown parameter '", name, ".", key, "' (docs/CONFIG.md lists them)"}));
       }
       if (!found->internal.empty()) {
-        throw ConfigError(yaml_path + ": '" + name + "." + key + "' cannot be set: " + found->internal);
+        throw ConfigError(message({yaml_path, ": '", name, ".", key, "' cannot be set: ", found->internal}));
       }
       try {
         found->read(kv.second);
