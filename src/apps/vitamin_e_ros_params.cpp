@@ -24,7 +24,7 @@ constexpr const char* kUsage = "usage: vitamin_e_ros_params --markdown | --check
 #if VITAMIN_E_WITH_ROS
 // A yaml scalar as the parameter server would hold it (rosparam's typing).
 XmlRpc::XmlRpcValue toValue(const YAML::Node& n) {
-  const std::string s = n.Scalar();
+  const std::string& s = n.Scalar();
   if (n.Tag() != "!" && (s == "true" || s == "false")) return XmlRpc::XmlRpcValue(s == "true");
   if (n.Tag() != "!") {
     char* end = nullptr;
@@ -61,9 +61,7 @@ int check(const std::string& path) {
 }
 #endif
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   const std::string a = argc > 1 ? argv[1] : "";
   if (a == "-h" || a == "--help") {
     std::cout << kUsage;
@@ -80,4 +78,14 @@ int main(int argc, char** argv) {
 #endif
   std::cerr << kUsage;
   vitamin_e::cli::fail("expected --markdown or --check FILE.yaml");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {  // a bad_alloc, a stream error: said, never an abort
+    vitamin_e::cli::fail(e.what());
+  }
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -107,7 +108,8 @@ StepConsistency stepConsistency(const std::vector<StepEstimate>& estimate, const
   r.lower = chiSquareQuantile(0.025, 6.0 * r.steps) / r.steps;
   r.upper = chiSquareQuantile(0.975, 6.0 * r.steps) / r.steps;
   std::vector<double> sorted = r.nees;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), middle, sorted.end());
   r.median_nees = sorted[sorted.size() / 2];
   r.fraction_within_95 = static_cast<double>(within) / r.steps;
   return r;
