@@ -136,13 +136,15 @@ inline double solveCeres(BaProblem& problem, double sigma, double tolerance, boo
   std::vector<bool> cam_added(problem.cameras.size(), false);
   for (const BaObservation& o : problem.observations) {
     if (problem.cameras[o.camera].fixed && problem.points[o.point].fixed) continue;  // constant term
-    cp.AddResidualBlock(new ReprojectionCost(problem.K, o.uv), &loss, &cams[7 * o.camera], &pts[3 * o.point]);
+    double* cam = &cams[7 * static_cast<std::size_t>(o.camera)];
+    double* pt = &pts[3 * static_cast<std::size_t>(o.point)];
+    cp.AddResidualBlock(new ReprojectionCost(problem.K, o.uv), &loss, cam, pt);
     if (!cam_added[o.camera]) {
       cam_added[o.camera] = true;
-      cp.SetManifold(&cams[7 * o.camera], manifold);
-      if (problem.cameras[o.camera].fixed) cp.SetParameterBlockConstant(&cams[7 * o.camera]);
+      cp.SetManifold(cam, manifold);
+      if (problem.cameras[o.camera].fixed) cp.SetParameterBlockConstant(cam);
     }
-    if (problem.points[o.point].fixed) cp.SetParameterBlockConstant(&pts[3 * o.point]);
+    if (problem.points[o.point].fixed) cp.SetParameterBlockConstant(pt);
   }
   if (!std::any_of(cam_added.begin(), cam_added.end(), [](bool b) { return b; })) delete manifold;
   ceres::Solver::Options opt;

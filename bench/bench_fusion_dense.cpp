@@ -70,7 +70,7 @@ struct Args {
   double beta = -1.0, lambda = -1.0;
 };
 
-const char* kUsage =
+const char* const kUsage =
     "usage: bench_fusion_dense RENDER_DIR [options]\n"
     "  RENDER_DIR          a render of render_sequence.py (scene.json, groundtruth_cam0_tum.txt, mav0/)\n"
     "  --config YAML       SLAM config (input and dense section)    --gt-input  ground-truth poses and depths\n"
@@ -146,7 +146,8 @@ struct Tracker {  // KLT + top-up; stands in for the VITAMIN-E front end
       cv::calcOpticalFlowPyrLK(prev, img, pts, out, st, err, cv::Size(21, 21), 3);
       std::size_t k = 0;
       for (std::size_t i = 0; i < pts.size(); ++i)
-        if (st[i] && out[i].x >= 0 && out[i].y >= 0 && out[i].x < img.cols && out[i].y < img.rows) {
+        if (st[i] && out[i].x >= 0 && out[i].y >= 0 && out[i].x < static_cast<float>(img.cols) &&
+            out[i].y < static_cast<float>(img.rows)) {
           pts[k] = out[i];
           ids[k++] = ids[i];
         }
@@ -288,13 +289,14 @@ int main(int argc, char** argv) try {
     const eval::Association assoc = eval::associate(est, gt, 0.005);
     Eigen::Matrix3Xd src(3, assoc.size()), dst(3, assoc.size());
     for (std::size_t k = 0; k < assoc.size(); ++k) {
-      src.col(k) = est[assoc[k].first].T_w_c.translation();
-      dst.col(k) = gt[assoc[k].second].T_w_c.translation();
+      const auto col = static_cast<Eigen::Index>(k);
+      src.col(col) = est[assoc[k].first].T_w_c.translation();
+      dst.col(col) = gt[assoc[k].second].T_w_c.translation();
     }
     S = eval::umeyamaAlignment(src, dst, true);
     double se = 0.0;
-    for (std::size_t k = 0; k < assoc.size(); ++k) se += (S.apply(Vector3d(src.col(k))) - dst.col(k)).squaredNorm();
-    ate_rmse = std::sqrt(se / std::max<std::size_t>(1, assoc.size()));
+    for (Eigen::Index k = 0; k < src.cols(); ++k) se += (S.apply(Vector3d(src.col(k))) - dst.col(k)).squaredNorm();
+    ate_rmse = std::sqrt(se / static_cast<double>(std::max<std::size_t>(1, assoc.size())));
   } else {
     // ---- ground-truth poses, KLT tracks, ray-cast noisy depth ----
     build_cfg.max_edge_px = 40.0;  // lenient: NLTGV repairs outliers, prune() cuts afterwards
@@ -465,7 +467,7 @@ int main(int argc, char** argv) try {
     const MeshGrid grid(m, 0.05);
     std::size_t hit = 0;
     for (const auto& p : seen) hit += grid.distance(p) < 0.05;
-    return seen.empty() ? 0.0 : static_cast<double>(hit) / seen.size();
+    return seen.empty() ? 0.0 : static_cast<double>(hit) / static_cast<double>(seen.size());
   };
   const auto acc25 = accuracy(m25), acc15 = accuracy(m15);
   const double comp25 = completeness(m25), comp15 = completeness(m15);
@@ -476,15 +478,15 @@ int main(int argc, char** argv) try {
     fusion::saveMeshPly(m25, args.out + "/mesh_2p5cm.ply");
     if (tsdf_run) fusion::saveMeshPly(mrun, args.out + "/mesh_runner.ply");
   }
-  auto minOf = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); };
+  auto min_of = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); };
   if (args.gt_input) {
     std::printf("input: ground-truth poses, KLT points <= %d, ray-cast depth, noise %.3g, outliers %.3g\n", args.points,
                 args.noise, args.outliers);
   } else {
     std::printf("input: SLAM (%s), %zu frames, %zu tracked; SLAM %.1f ms wall / %.1f ms process CPU per frame\n",
                 args.config.empty() ? "built-in config" : args.config.c_str(), slam_frames, slam_tracked,
-                slam_wall_ms / std::max<std::size_t>(1, slam_frames),
-                slam_cpu_ms / std::max<std::size_t>(1, slam_frames));
+                slam_wall_ms / static_cast<double>(std::max<std::size_t>(1, slam_frames)),
+                slam_cpu_ms / static_cast<double>(std::max<std::size_t>(1, slam_frames)));
     std::printf("Sim(3) to ground truth: scale %.4f m per map unit, ATE rmse %.4f m; voxels %.4f / %.4f map units\n", s,
                 ate_rmse, c15.voxel_size, c25.voxel_size);
   }
@@ -493,12 +495,12 @@ int main(int argc, char** argv) try {
               nltgv_cfg.warm_iterations);
   std::printf("%s", timings.table().c_str());
   std::printf("wall ms/frame (min / median), thread CPU ms/frame (min / median):\n");
-  std::printf("  mesh (delaunay+nltgv+prune): %7.2f / %7.2f   cpu %7.2f / %7.2f\n", minOf(mesh_ms), median(mesh_ms),
-              minOf(mesh_cpu), median(mesh_cpu));
-  std::printf("  tsdf 15cm integrate+mc:      %7.2f / %7.2f   cpu %7.2f / %7.2f\n", minOf(t15_ms), median(t15_ms),
-              minOf(t15_cpu), median(t15_cpu));
-  std::printf("  tsdf 2.5cm integrate+mc:     %7.2f / %7.2f   cpu %7.2f / %7.2f\n", minOf(t25_ms), median(t25_ms),
-              minOf(t25_cpu), median(t25_cpu));
+  std::printf("  mesh (delaunay+nltgv+prune): %7.2f / %7.2f   cpu %7.2f / %7.2f\n", min_of(mesh_ms), median(mesh_ms),
+              min_of(mesh_cpu), median(mesh_cpu));
+  std::printf("  tsdf 15cm integrate+mc:      %7.2f / %7.2f   cpu %7.2f / %7.2f\n", min_of(t15_ms), median(t15_ms),
+              min_of(t15_cpu), median(t15_cpu));
+  std::printf("  tsdf 2.5cm integrate+mc:     %7.2f / %7.2f   cpu %7.2f / %7.2f\n", min_of(t25_ms), median(t25_ms),
+              min_of(t25_cpu), median(t25_cpu));
   std::printf("vertex rel. depth error: raw median %.4f p90 %.4f | nltgv median %.4f p90 %.4f\n", median(raw_err),
               percentile(raw_err, 90), median(smooth_err), percentile(smooth_err, 90));
   std::printf("dense rel. depth error:  raw median %.4f p90 %.4f | nltgv median %.4f p90 %.4f (%zu px)\n",

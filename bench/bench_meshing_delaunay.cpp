@@ -13,10 +13,10 @@
 
 namespace {
 
-const char* kUsage = "usage: bench_meshing_delaunay [--points N] [--repeats R] [--seed S]\n"
-                     "  --points N    random points in a 752x480 image (default 10000)\n"
-                     "  --repeats R   triangulations timed (default 30)\n"
-                     "  --seed S      random seed (default 3)\n";
+const char* const kUsage = "usage: bench_meshing_delaunay [--points N] [--repeats R] [--seed S]\n"
+                           "  --points N    random points in a 752x480 image (default 10000)\n"
+                           "  --repeats R   triangulations timed (default 30)\n"
+                           "  --seed S      random seed (default 3)\n";
 
 }  // namespace
 

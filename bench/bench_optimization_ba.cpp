@@ -157,7 +157,8 @@ Row runIncremental(int window_points, const Args& a) {
   std::vector<Eigen::Vector3d> est_p(obs_src.points.size());
   std::vector<bool> has_p(obs_src.points.size(), false);
   std::vector<std::vector<int>> obs_of_point(obs_src.points.size());
-  for (size_t k = 0; k < obs_src.observations.size(); ++k) obs_of_point[obs_src.observations[k].point].push_back(k);
+  for (size_t k = 0; k < obs_src.observations.size(); ++k)
+    obs_of_point[obs_src.observations[k].point].push_back(static_cast<int>(k));
 
   // Builds the window problem [first, last]; new points are triangulated from est_T.
   auto build = [&](int first, int last, BaProblem* prob, BaProblem* truth, std::vector<int>* pt_ids) {
@@ -341,7 +342,7 @@ int runAll(const Args& a) {
 
 }  // namespace
 
-const char* kUsage =
+const char* const kUsage =
     "usage: bench_optimization_ba [--quick] [--no-ceres] [--threads N] [--threads2 M] [--free-cams K] [--frames F]\n"
     "                             [--point-iterations P] [--point-extrapolation E] [--point-tolerance T]\n"
     "  --quick               smaller problems\n"

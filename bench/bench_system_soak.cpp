@@ -62,8 +62,8 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
     mx += x[i];
     my += y[i];
   }
-  mx /= n;
-  my /= n;
+  mx /= static_cast<double>(n);
+  my /= static_cast<double>(n);
   double sxy = 0, sxx = 0;
   for (std::size_t i = 0; i < n; ++i) {
     sxy += (x[i] - mx) * (y[i] - my);
@@ -72,15 +72,15 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
   return sxx > 0 ? sxy / sxx : 0.0;
 }
 
-const char* kUsage = "usage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]\n"
-                     "                         [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]\n"
-                     "  --minutes M        wall-clock minutes to run (default 60)\n"
-                     "  --sample-every N   frames between memory samples (default 200)\n"
-                     "  --width W --height H  image size (default 376x240)\n"
-                     "  --archive-voxel V  map.archive_voxel_m (default: the shipped default)\n"
-                     "  --max-frames F     stop after F frames (0: no limit)\n"
-                     "  --seed S           scene and noise seed\n"
-                     "  --realtime         pace the frames at 20 Hz, as a camera\n";
+const char* const kUsage = "usage: bench_system_soak [--minutes M] [--sample-every N] [--width W --height H]\n"
+                           "                         [--archive-voxel V] [--max-frames F] [--seed S] [--realtime]\n"
+                           "  --minutes M        wall-clock minutes to run (default 60)\n"
+                           "  --sample-every N   frames between memory samples (default 200)\n"
+                           "  --width W --height H  image size (default 376x240)\n"
+                           "  --archive-voxel V  map.archive_voxel_m (default: the shipped default)\n"
+                           "  --max-frames F     stop after F frames (0: no limit)\n"
+                           "  --seed S           scene and noise seed\n"
+                           "  --realtime         pace the frames at 20 Hz, as a camera\n";
 
 }  // namespace
 
@@ -144,13 +144,13 @@ int main(int argc, char** argv) try {
 
   std::vector<Sample> samples;
   const auto start = ve::TimingClock::now();
-  auto wallMin = [&] { return ve::elapsedMs(start) / 60000.0; };
+  auto wall_minutes = [&] { return ve::elapsedMs(start) / 60000.0; };
   auto last_sample_time = start;
   std::uint64_t tracked = 0, nonfinite = 0;
   double max_step = 0.0;
   std::uint64_t frame = 0;
   for (;; ++frame) {
-    const double t = frame / seq.rate_hz;
+    const double t = static_cast<double>(frame) / seq.rate_hz;
     if (realtime) std::this_thread::sleep_until(start + std::chrono::duration<double>(t));
     ve::synth::RenderOptions options;
     options.noise_sigma = seq.noise_sigma;
@@ -161,13 +161,14 @@ int main(int argc, char** argv) try {
       ++tracked;
       if (!r.T_w_c.matrix().allFinite()) ++nonfinite;
     }
-    const bool done = wallMin() >= minutes || (max_frames > 0 && static_cast<long long>(frame + 1) >= max_frames);
+    const bool done =
+        wall_minutes() >= minutes || (max_frames > 0 && frame + 1 >= static_cast<std::uint64_t>(max_frames));
     if ((frame + 1) % sample_every == 0 || done) {
       const auto now = ve::TimingClock::now();
       Sample smp;
       smp.frame = frame + 1;
-      smp.wall_min = wallMin();
-      smp.seq_min = (frame + 1) / seq.rate_hz / 60.0;
+      smp.wall_min = wall_minutes();
+      smp.seq_min = static_cast<double>(frame + 1) / seq.rate_hz / 60.0;
       smp.rss_mb = rssMb();
       smp.map_points = system.mapPoints().size();
       smp.dormant = system.dormantMapPoints();
@@ -175,12 +176,13 @@ int main(int argc, char** argv) try {
       smp.trajectory = tr.size();
       double traj_bytes = static_cast<double>(tr.capacity()) * sizeof(ve::pipeline::TrajectoryEntry);
       if (!tr.empty() && tr.back().timestamp_text.capacity() > 15) {  // beyond the small-string buffer
-        traj_bytes += static_cast<double>(tr.size()) * (tr.back().timestamp_text.capacity() + 17);
+        traj_bytes += static_cast<double>(tr.size()) * static_cast<double>(tr.back().timestamp_text.capacity() + 17);
       }
       smp.trajectory_mb = traj_bytes / (1024.0 * 1024.0);
       smp.init_retries = system.initRetries();
       const std::uint64_t since = samples.empty() ? frame + 1 : frame + 1 - samples.back().frame;
-      smp.ms_per_frame = std::chrono::duration<double, std::milli>(now - last_sample_time).count() / since;
+      smp.ms_per_frame =
+          std::chrono::duration<double, std::milli>(now - last_sample_time).count() / static_cast<double>(since);
       last_sample_time = now;
       samples.push_back(smp);
       std::printf("%8llu %9.2f %9.2f %9.2f %10zu %8zu %10zu %8d %9.1f\n", static_cast<unsigned long long>(smp.frame),
@@ -227,8 +229,9 @@ int main(int argc, char** argv) try {
   const bool explained = enough && !flat && unexplained * span_min < std::max(1.0, 0.01 * rss_end);
   std::printf("\n# %llu frames (%.1f sequence minutes) in %.1f wall minutes, %llu tracked (%.1f %%), %d init "
               "retries, %llu non-finite poses, largest trajectory step %.3f map units\n",
-              static_cast<unsigned long long>(frames), frames / seq.rate_hz / 60.0, samples.back().wall_min,
-              static_cast<unsigned long long>(tracked), 100.0 * tracked / frames, system.initRetries(),
+              static_cast<unsigned long long>(frames), static_cast<double>(frames) / seq.rate_hz / 60.0,
+              samples.back().wall_min, static_cast<unsigned long long>(tracked),
+              100.0 * static_cast<double>(tracked) / static_cast<double>(frames), system.initRetries(),
               static_cast<unsigned long long>(nonfinite), max_step);
   std::printf("# RSS: start %.1f MB, second-half start %.1f MB, end %.1f MB; second-half slope %.3f MB/min "
               "(trajectory growth %.3f MB/min, map points %+.0f /min ~ %.3f MB/min, dormant points %.3f MB/min, "

@@ -197,7 +197,7 @@ TEST(Interfaces, DiagnosticsAndCovariance) {
     if (f != few.end() && kv.second > 0.0) ratio.push_back(f->second / kv.second);
   }
   ASSERT_GT(ratio.size(), 20u);
-  std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
+  std::nth_element(ratio.begin(), ratio.begin() + static_cast<std::ptrdiff_t>(ratio.size() / 2), ratio.end());
   const double median = ratio[ratio.size() / 2];
   RecordProperty("covariance_ratio_few_over_all", std::to_string(median));
   ROS_INFO("position covariance with a tenth of the points / with all: median %.2f over %zu frames", median,

@@ -84,7 +84,7 @@ TEST(Pinhole, BinningKeepsPixelCentresAndValidityIsChecked) {
   const vitamin_e::camera::Pinhole K{400.0, 410.0, 319.5, 239.5};
   // 2x2 binning: full pixels 0 and 1 become binned pixel 0, centred at full 0.5.
   const vitamin_e::camera::Pinhole B = K.binned(2.0, 2.0);
-  for (const Eigen::Vector2d full : {Eigen::Vector2d(0.5, 0.5), Eigen::Vector2d(100.5, 300.5)}) {
+  for (const Eigen::Vector2d& full : {Eigen::Vector2d(0.5, 0.5), Eigen::Vector2d(100.5, 300.5)}) {
     const Eigen::Vector2d binned = (full - Eigen::Vector2d(0.5, 0.5)) / 2.0;
     EXPECT_LT((B.unproject(binned) - K.unproject(full)).norm(), 1e-12);
   }

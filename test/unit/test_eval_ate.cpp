@@ -167,7 +167,7 @@ void checkRoundTrip(const std::string& gt_path, const ve::Trajectory& gt, ve::Tr
   EXPECT_LT((S_hat.t - S.t).norm(), 0.02);
   // Independent computation of the same optimum.
   Eigen::Matrix3Xd src(3, est.size()), dst(3, est.size());
-  for (std::size_t i = 0; i < est.size(); ++i) {
+  for (Eigen::Index i = 0; i < src.cols(); ++i) {
     src.col(i) = est[i].T_w_c.translation();
     dst.col(i) = gt_read[i].T_w_c.translation();
   }
@@ -190,7 +190,7 @@ TEST(Umeyama, RecoversExactSim3AndSe3) {
   const ve::Trajectory gt = makeGroundTruth(50, 0.0, 0.1);
   const ve::Sim3 S = knownSim3();
   Eigen::Matrix3Xd src(3, gt.size()), dst(3, gt.size());
-  for (std::size_t i = 0; i < gt.size(); ++i) {
+  for (Eigen::Index i = 0; i < src.cols(); ++i) {
     src.col(i) = gt[i].T_w_c.translation();
     dst.col(i) = S.apply(Eigen::Vector3d(src.col(i)));
   }
@@ -201,7 +201,7 @@ TEST(Umeyama, RecoversExactSim3AndSe3) {
   // SE(3) on scale-free data.
   ve::Sim3 rigid = S;
   rigid.scale = 1.0;
-  for (std::size_t i = 0; i < gt.size(); ++i) dst.col(i) = rigid.apply(Eigen::Vector3d(src.col(i)));
+  for (Eigen::Index i = 0; i < src.cols(); ++i) dst.col(i) = rigid.apply(Eigen::Vector3d(src.col(i)));
   const ve::Sim3 fit_se3 = ve::umeyamaAlignment(src, dst, false);
   EXPECT_DOUBLE_EQ(fit_se3.scale, 1.0);
   EXPECT_LT(angleBetween(fit_se3.R, S.R), 1e-9);
@@ -252,7 +252,7 @@ TEST(Evaluate, KittiGroundTruthWithImplicitAndExplicitTimes) {
   checkRoundTrip(dir.file("poses.txt"), gt, ve::TrajectoryFormat::kKitti, dir.file("est.txt"));
   // times.txt beside the poses wins over index * 0.1 s.
   FILE* f = std::fopen(dir.file("times.txt").c_str(), "w");
-  for (std::size_t i = 0; i < gt.size(); ++i) std::fprintf(f, "%.6e\n", 5.0 + 0.1 * i);
+  for (std::size_t i = 0; i < gt.size(); ++i) std::fprintf(f, "%.6e\n", 5.0 + 0.1 * static_cast<double>(i));
   std::fclose(f);
   const ve::Trajectory timed = ve::readTrajectory(dir.file("poses.txt"));
   ASSERT_EQ(timed.size(), gt.size());

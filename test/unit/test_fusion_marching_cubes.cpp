@@ -71,7 +71,7 @@ TEST(MarchingCubes, RandomFieldsGiveClosedSurfaces) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> U(-1.0f, 1.0f);
     const int n = 12;
-    std::vector<float> v(n * n * n);
+    std::vector<float> v(static_cast<std::size_t>(n) * n * n);
     for (int z = 0; z < n; ++z)
       for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
@@ -92,7 +92,7 @@ TEST(MarchingCubes, SphereIsWithinOneVoxelClosedAndOfGenusZero) {
   const float h = 0.1f;
   const Eigen::Vector3d c(1.13, 1.21, 1.07);
   const double r = 0.8;
-  std::vector<float> v(n * n * n);
+  std::vector<float> v(static_cast<std::size_t>(n) * n * n);
   for (int z = 0; z < n; ++z)
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x)

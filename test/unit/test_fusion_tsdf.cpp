@@ -72,7 +72,7 @@ TEST(Tsdf, SphereFromManyViewsIsAccurateAndClosed) {
     worst = std::max(worst, std::abs((p - c).norm() - r));
     const double dot = mesh.normals[i].cast<double>().dot((p - c).normalized());
     normal_worst = std::min(normal_worst, dot);
-    normal_mean += dot / mesh.vertices.size();
+    normal_mean += dot / static_cast<double>(mesh.vertices.size());
   }
   EXPECT_LT(worst, cfg.voxel_size);
   // Normals point out of the sphere (area-weighted face normals: a little bumpy).

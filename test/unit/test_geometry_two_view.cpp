@@ -31,7 +31,7 @@ void makeScene(const Eigen::Isometry3d& T_c1_c0, int n, double noise_px, double 
 }
 
 double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
   return v[v.size() / 2];
 }
 

@@ -17,7 +17,7 @@ namespace {
 
 constexpr int kW = 64, kH = 48;
 
-const char* kSensorYaml = R"(%YAML:1.0
+const char* const kSensorYaml = R"(%YAML:1.0
 sensor_type: camera
 T_BS:
   cols: 4
@@ -31,7 +31,7 @@ distortion_model: radial-tangential
 distortion_coefficients: [-0.28, 0.07, 0.0002, 0.00002]
 )";
 
-const char* kRosYaml = R"(image_width: 64
+const char* const kRosYaml = R"(image_width: 64
 image_height: 48
 camera_matrix: {rows: 3, cols: 3, data: [50.0, 0, 32.0, 0, 50.0, 24.0, 0, 0, 1]}
 distortion_model: plumb_bob
@@ -66,7 +66,7 @@ class DatasetTest : public ::testing::Test {
     std::string csv = "#timestamp [ns],filename\n";
     for (int i = 0; i < n; ++i) {
       const std::string ns = std::to_string(1403715273262142976ULL + 50000128ULL * i);
-      csv += ns + "," + ns + ".png\r\n";  // CRLF as some copies have
+      csv.append(ns).append(",").append(ns).append(".png\r\n");  // CRLF as some copies have
       cv::imwrite((cam / "data" / (ns + ".png")).string(), frameImage(i));
     }
     write(cam / "data.csv", csv);

@@ -81,7 +81,7 @@ class RunnerTest : public ::testing::Test {
     std::string csv = "#timestamp [ns],filename\n";
     for (int i = 0; i < n; ++i) {
       const std::string ns = std::to_string(1403715273262142976ULL + 50000000ULL * i);
-      csv += ns + "," + ns + ".png\n";
+      csv.append(ns).append(",").append(ns).append(".png\n");
       cv::imwrite((cam / "data" / (ns + ".png")).string(), big(cv::Rect(i, i / 2, w, h)).clone());
     }
     write(cam / "data.csv", csv);

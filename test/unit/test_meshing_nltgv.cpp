@@ -50,7 +50,7 @@ double meanAbsError(const FrameMesh& mesh, const std::vector<double>& truth, boo
   double s = 0.0;
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
     s += std::abs((smoothed ? mesh.vertices[i].inv_depth : mesh.vertices[i].measured_inv_depth) - truth[i]);
-  return s / mesh.vertices.size();
+  return s / static_cast<double>(mesh.vertices.size());
 }
 
 // A slanted plane n . p = d in the camera frame: inverse depth is affine in the pixel.

@@ -23,17 +23,20 @@ BlockMatrix6 randomSpd(int n, unsigned seed, Eigen::MatrixXd* dense) {
       J(r, c1 + k) = 0.8 * g(rng);
     }
   }
-  *dense = J.transpose() * J + 1e-3 * Eigen::MatrixXd::Identity(6 * n, 6 * n);
+  *dense = J.transpose() * J +
+           1e-3 * Eigen::MatrixXd::Identity(6 * static_cast<Eigen::Index>(n), 6 * static_cast<Eigen::Index>(n));
   BlockMatrix6 A;
   A.resize(n);
   for (int i = 0; i < n; ++i)
-    for (int l = 0; l < n; ++l) A.at(i, l) = dense->block<6, 6>(6 * i, 6 * l);
+    for (int l = 0; l < n; ++l)
+      A.at(i, l) = dense->block<6, 6>(6 * static_cast<Eigen::Index>(i), 6 * static_cast<Eigen::Index>(l));
   return A;
 }
 
 double error(const std::vector<Vector6d>& x, const Eigen::VectorXd& ref) {
   double e = 0.0;
-  for (size_t i = 0; i < x.size(); ++i) e = std::max(e, (x[i] - ref.segment<6>(6 * i)).lpNorm<Eigen::Infinity>());
+  for (size_t i = 0; i < x.size(); ++i)
+    e = std::max(e, (x[i] - ref.segment<6>(static_cast<Eigen::Index>(6 * i))).lpNorm<Eigen::Infinity>());
   return e / ref.lpNorm<Eigen::Infinity>();
 }
 
@@ -49,7 +52,7 @@ TEST(BlockSolvers, PcgAndGaussSeidelMatchDenseSolve) {
   Eigen::VectorXd bd(6 * n);
   for (int i = 0; i < n; ++i) {
     for (int k = 0; k < 6; ++k) b[i](k) = g(rng);
-    bd.segment<6>(6 * i) = b[i];
+    bd.segment<6>(6 * static_cast<Eigen::Index>(i)) = b[i];
   }
   const Eigen::VectorXd ref = D.ldlt().solve(bd);
 

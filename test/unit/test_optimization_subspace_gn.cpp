@@ -31,7 +31,7 @@ double maxPointError(const BaProblem& a, const BaProblem& b) {
 double meanPointError(const BaProblem& a, const BaProblem& b) {
   double e = 0.0;
   for (size_t i = 0; i < a.points.size(); ++i) e += (a.points[i].p_w - b.points[i].p_w).norm();
-  return e / std::max<size_t>(1, a.points.size());
+  return e / static_cast<double>(std::max<size_t>(1, a.points.size()));
 }
 
 void fixOldest(BaProblem* p, int n) {

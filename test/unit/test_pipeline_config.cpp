@@ -104,7 +104,7 @@ class ConfigFile : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string write(const std::string& text) {
-    const std::string p = (dir_ / ("c" + std::to_string(n_++) + ".yaml")).string();
+    std::string p = (dir_ / ("c" + std::to_string(n_++) + ".yaml")).string();
     std::ofstream(p) << text;
     return p;
   }

@@ -30,7 +30,7 @@ sensor_msgs::Image makeImage(const std::string& encoding, int channels, int byte
   m.height = kH;
   m.is_bigendian = 0;
   m.step = kW * channels * bytes_per_channel;
-  m.data.assign(m.step * kH, 0);
+  m.data.assign(static_cast<std::size_t>(m.step) * kH, 0);
   return m;
 }
 
@@ -69,7 +69,7 @@ TEST(RosConversions, Mono16IsScaledTo8Bit) {
     sensor_msgs::Image m = makeImage(e, 1, 2);
     for (int p = 0; p < kW * kH; ++p) {
       const std::uint16_t v = static_cast<std::uint16_t>(p == 0 ? 65535 : 100 * 256 + 77);
-      std::memcpy(&m.data[2 * p], &v, 2);  // little endian host
+      std::memcpy(&m.data[2 * static_cast<std::size_t>(p)], &v, 2);  // little endian host
     }
     cv::Mat g;
     std::string err;
@@ -89,7 +89,7 @@ TEST(RosConversions, Mono16IsScaledTo8Bit) {
 TEST(RosConversions, Mono8WithPaddedRowsKeepsItsStep) {
   sensor_msgs::Image m = makeImage(enc::MONO8, 1, 1);
   m.step = kW + 4;
-  m.data.assign(m.step * kH, 0);
+  m.data.assign(static_cast<std::size_t>(m.step) * kH, 0);
   for (int y = 0; y < kH; ++y) {
     for (int x = 0; x < kW; ++x) m.data[y * m.step + x] = static_cast<std::uint8_t>(10 * y + x);
     for (int x = kW; x < static_cast<int>(m.step); ++x) m.data[y * m.step + x] = 255;  // padding

@@ -93,7 +93,7 @@ TEST(RosDenseFrame, MalformedMessagesAreRefusedWithAReason) {
   ASSERT_TRUE(fromTrackedFrameMsg(msg, &back, &image, &why)) << why;
   EXPECT_EQ(back.map_scaling, frame.map_scaling);
   EXPECT_EQ(back.ids, frame.ids);
-  auto refused = [&](vitamin_e::TrackedFrame m, const std::string& reason) {
+  auto refused = [&](const vitamin_e::TrackedFrame& m, const std::string& reason) {
     std::string error;
     EXPECT_FALSE(fromTrackedFrameMsg(m, &back, &image, &error));
     EXPECT_NE(error.find(reason), std::string::npos) << error;

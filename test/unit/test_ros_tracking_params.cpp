@@ -89,7 +89,7 @@ TEST(RosTrackingParams, NoImuSpellings) {
 }
 
 TEST(RosTrackingParams, ErrorsNameTheParameter) {
-  auto expect_error = [](const std::string& name, XmlRpc::XmlRpcValue value, const std::string& needle) {
+  auto expect_error = [](const std::string& name, const XmlRpc::XmlRpcValue& value, const std::string& needle) {
     Params in;
     in.values[name] = value;
     const std::string e = errorOf(in);

@@ -27,7 +27,8 @@ namespace {
 class TempDir {
  public:
   TempDir()
-      : path_(fs::temp_directory_path() / ("ve_synth_" + std::to_string(::getpid()) + "_" + std::to_string(n_++))) {
+      : path_(fs::temp_directory_path() /
+              ("ve_synth_" + std::to_string(::getpid()) + "_" + std::to_string(num_created++))) {
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
@@ -36,7 +37,7 @@ class TempDir {
 
  private:
   fs::path path_;
-  static inline int n_ = 0;
+  static inline int num_created = 0;
 };
 
 float bilinear8(const cv::Mat& img, const Eigen::Vector2d& uv) {
@@ -88,7 +89,7 @@ PixelCheck checkFacePoints(const vs::Scene& scene, int face, const vitamin_e::ca
     err_shift.push_back(std::abs(bilinear8(img, uv + Eigen::Vector2d(3.0, 0.0)) - truth));
   }
   auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return v[v.size() / 2];
   };
   PixelCheck c;

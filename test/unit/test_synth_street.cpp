@@ -32,7 +32,8 @@ namespace {
 class TempDir {
  public:
   TempDir()
-      : path_(fs::temp_directory_path() / ("ve_street_" + std::to_string(::getpid()) + "_" + std::to_string(n_++))) {
+      : path_(fs::temp_directory_path() /
+              ("ve_street_" + std::to_string(::getpid()) + "_" + std::to_string(num_created++))) {
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
@@ -41,7 +42,7 @@ class TempDir {
 
  private:
   fs::path path_;
-  static inline int n_ = 0;
+  static inline int num_created = 0;
 };
 
 const vs::DrivePath& turnPath() {
@@ -330,7 +331,8 @@ TEST(SynthStreet, FacadesAreRichAndNotOneRepeatedTile) {
     ASSERT_GT(tex.total(), 200000u);
     textures.push_back(tex);
     // Many curvature extrema at the scale of a few texels (2 cm).
-    extrema_per_kilotexel = std::min(extrema_per_kilotexel, 1000.0 * curvatureExtrema(tex) / tex.total());
+    extrema_per_kilotexel =
+        std::min(extrema_per_kilotexel, 1000.0 * curvatureExtrema(tex) / static_cast<double>(tex.total()));
     // Patches of 1.3 m: windows repeat, but most patches match nowhere else
     // and none matches elsewhere perfectly (as a repeated tile would).
     for (int n = 0; n < 8; ++n, ++patches) {

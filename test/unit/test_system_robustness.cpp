@@ -331,13 +331,13 @@ void runBlackout(SlamRun* run) {
 double wholeTrajectoryAte(const System& system) {
   const auto& traj = system.trajectory();
   Eigen::Matrix3Xd est(3, traj.size()), gt(3, traj.size());
-  for (std::size_t k = 0; k < traj.size(); ++k) {
+  for (Eigen::Index k = 0; k < est.cols(); ++k) {
     est.col(k) = traj[k].T_w_c.translation();
     gt.col(k) = world().path->T_w_c(traj[k].timestamp - frameTime(0)).translation();
   }
   const ve::eval::Sim3 s = ve::eval::umeyamaAlignment(est, gt, true);
   double sum = 0.0;
-  for (std::size_t k = 0; k < traj.size(); ++k) sum += (s.apply(Eigen::Vector3d(est.col(k))) - gt.col(k)).squaredNorm();
+  for (Eigen::Index k = 0; k < est.cols(); ++k) sum += (s.apply(Eigen::Vector3d(est.col(k))) - gt.col(k)).squaredNorm();
   return std::sqrt(sum / static_cast<double>(traj.size()));
 }
 }  // namespace
@@ -490,7 +490,7 @@ class ConfigFiles : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   std::string write(const std::string& name, const std::string& text) {
-    const std::string p = (dir_ / name).string();
+    std::string p = (dir_ / name).string();
     std::ofstream(p) << text;
     return p;
   }

@@ -43,19 +43,19 @@ class RunnerSignal : public ::testing::Test {
   static constexpr int kListed = 4000;  // far more than a test can process: the run is always cut
 
   static void SetUpTestSuite() {
-    runner_ = fs::read_symlink("/proc/self/exe").parent_path() / "vitamin_e_run";
-    dir_ = fs::temp_directory_path() / ("ve_runner_signal_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    if (!fs::exists(runner_)) return;
+    runner_path = fs::read_symlink("/proc/self/exe").parent_path() / "vitamin_e_run";
+    work_dir = fs::temp_directory_path() / ("ve_runner_signal_" + std::to_string(::getpid()));
+    fs::remove_all(work_dir);
+    if (!fs::exists(runner_path)) return;
     vitamin_e::synth::SequenceConfig seq;
     seq.frames = kRendered;
     seq.width = 376;
     seq.height = 240;
     seq.seed = 2;
-    vitamin_e::synth::writeSequence((dir_ / "seq").string(), seq);
+    vitamin_e::synth::writeSequence((work_dir / "seq").string(), seq);
     // The images listed back and forth (0..39, 38..1, 0..) with increasing stamps:
     // a long, continuous sequence from a few rendered frames.
-    const fs::path cam = dir_ / "seq" / "mav0" / "cam0";
+    const fs::path cam = work_dir / "seq" / "mav0" / "cam0";
     std::vector<std::string> names;
     {
       std::ifstream in(cam / "data.csv");
@@ -74,11 +74,11 @@ class RunnerSignal : public ::testing::Test {
       csv << (1600000000000000000LL + 50000000LL * i) << "," << names[idx] << "\n";
     }
   }
-  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static void TearDownTestSuite() { fs::remove_all(work_dir); }
 
   void SetUp() override {
-    ASSERT_TRUE(fs::exists(runner_)) << "vitamin_e_run not built (" << runner_ << ")";  // a failure, not a skip
-    ASSERT_TRUE(fs::exists(dir_ / "seq" / "mav0" / "cam0" / "data.csv"));
+    ASSERT_TRUE(fs::exists(runner_path)) << "vitamin_e_run not built (" << runner_path << ")";  // a failure, not a skip
+    ASSERT_TRUE(fs::exists(work_dir / "seq" / "mav0" / "cam0" / "data.csv"));
   }
 
   // Starts the runner, waits until it has processed a few frames, sends `sig`,
@@ -90,7 +90,7 @@ class RunnerSignal : public ::testing::Test {
       std::freopen("/dev/null", "r", stdin);
       std::freopen("/dev/null", "w", stdout);
       std::freopen(err_path.c_str(), "w", stderr);
-      const std::string dataset = (dir_ / "seq").string(), out_dir = out.string(), runner = runner_.string();
+      const std::string dataset = (work_dir / "seq").string(), out_dir = out.string(), runner = runner_path.string();
       std::vector<const char*> argv = {runner.c_str(), "--dataset", dataset.c_str(), "--out", out_dir.c_str()};
       for (const std::string& a : extra) argv.push_back(a.c_str());
       argv.push_back(nullptr);
@@ -199,17 +199,17 @@ class RunnerSignal : public ::testing::Test {
     }
   }
 
-  static fs::path runner_;
-  static fs::path dir_;
+  static fs::path runner_path;
+  static fs::path work_dir;
 };
 
-fs::path RunnerSignal::runner_;
-fs::path RunnerSignal::dir_;
+fs::path RunnerSignal::runner_path;
+fs::path RunnerSignal::work_dir;
 
 }  // namespace
 
 TEST_F(RunnerSignal, SigintWritesTrajectoryMapAndStats) {
-  const fs::path out = dir_ / "out_int";
+  const fs::path out = work_dir / "out_int";
   std::string err;
   const int status = runAndSignal(SIGINT, out, &err);
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0) << ": " << err;
@@ -219,7 +219,7 @@ TEST_F(RunnerSignal, SigintWritesTrajectoryMapAndStats) {
 }
 
 TEST_F(RunnerSignal, SigtermWritesTrajectoryMapAndStats) {
-  const fs::path out = dir_ / "out_term";
+  const fs::path out = work_dir / "out_term";
   std::string err;
   const int status = runAndSignal(SIGTERM, out, &err);
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0) << ": " << err;
@@ -238,8 +238,8 @@ int runToEnd(const fs::path& runner, const std::string& args, const fs::path& er
 }  // namespace
 
 TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
-  const fs::path out = dir_ / "out_map";
-  const std::string map = (dir_ / "seq.vemap").string(), tsdf = (dir_ / "seq.vetsdf").string();
+  const fs::path out = work_dir / "out_map";
+  const std::string map = (work_dir / "seq.vemap").string(), tsdf = (work_dir / "seq.vetsdf").string();
   std::string err;
   const int status = runAndSignal(SIGINT, out, &err, {"--save-map", map, "--save-tsdf", tsdf});
   ASSERT_TRUE(WIFEXITED(status)) << err;
@@ -252,12 +252,12 @@ TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
 
   // Frames 0..59 of the same sequence in the saved map: found by the
   // relocalizer, no initialization, the file untouched.
-  const fs::path out2 = dir_ / "out_localize";
-  const std::string base = "--dataset " + (dir_ / "seq").string() + " --max-frames 60 --quiet";
-  ASSERT_EQ(runToEnd(runner_,
+  const fs::path out2 = work_dir / "out_localize";
+  const std::string base = "--dataset " + (work_dir / "seq").string() + " --max-frames 60 --quiet";
+  ASSERT_EQ(runToEnd(runner_path,
                      base + " --out " + out2.string() + " --load-map " + map + " --localization-only" +
                          " --load-tsdf " + tsdf,
-                     dir_ / "localize.stderr", &err),
+                     work_dir / "localize.stderr", &err),
             0)
       << err;
   const YAML::Node stats = YAML::LoadFile((out2 / "stats.json").string());
@@ -268,16 +268,16 @@ TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
   EXPECT_TRUE(readFile(map) == map_bytes);
 
   // Bad map files: one error line, exit code 2.
-  auto expectRefused = [&](const std::string& args, const std::string& what) {
-    const int code =
-        runToEnd(runner_, base + " --out " + (dir_ / "out_bad").string() + " " + args, dir_ / "bad.stderr", &err);
+  auto expect_refused = [&](const std::string& args, const std::string& what) {
+    const int code = runToEnd(runner_path, base + " --out " + (work_dir / "out_bad").string() + " " + args,
+                              work_dir / "bad.stderr", &err);
     EXPECT_EQ(code, 2) << args << ": " << err;
     EXPECT_EQ(err.rfind("error: ", 0), 0u) << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
     EXPECT_NE(err.find(what), std::string::npos) << "'" << what << "' not in: " << err;
   };
-  const std::string empty = (dir_ / "empty.vemap").string(), cut = (dir_ / "cut.vemap").string(),
-                    flipped = (dir_ / "flipped.vemap").string(), other = (dir_ / "other.vemap").string();
+  const std::string empty = (work_dir / "empty.vemap").string(), cut = (work_dir / "cut.vemap").string(),
+                    flipped = (work_dir / "flipped.vemap").string(), other = (work_dir / "other.vemap").string();
   std::ofstream(empty, std::ios::binary).flush();
   std::ofstream(cut, std::ios::binary) << map_bytes.substr(0, map_bytes.size() * 2 / 3);
   std::string flip = map_bytes;
@@ -286,14 +286,14 @@ TEST_F(RunnerSignal, SigintWritesTheMapAndALaterRunLocalizesInIt) {
   vitamin_e::map::MapFileContents small = saved;
   small.camera = vitamin_e::camera::Camera(188, 120, 100.0, 100.0, 94.0, 60.0);
   ASSERT_TRUE(vitamin_e::map::saveMapFile(small, other));
-  expectRefused("--load-map " + (dir_ / "missing.vemap").string(), "missing.vemap");
-  expectRefused("--load-map " + empty, "empty");
-  expectRefused("--load-map " + cut, "truncated");
-  expectRefused("--load-map " + flipped, "corrupt");
-  expectRefused("--load-map " + other, "188x120");
-  expectRefused("--localization-only", "--load-map");
-  expectRefused("--load-map " + map + " --localization-only --save-map " + map, "--save-map");
-  expectRefused("--load-tsdf " + map, "not a vitamin_e TSDF file");
+  expect_refused("--load-map " + (work_dir / "missing.vemap").string(), "missing.vemap");
+  expect_refused("--load-map " + empty, "empty");
+  expect_refused("--load-map " + cut, "truncated");
+  expect_refused("--load-map " + flipped, "corrupt");
+  expect_refused("--load-map " + other, "188x120");
+  expect_refused("--localization-only", "--load-map");
+  expect_refused("--load-map " + map + " --localization-only --save-map " + map, "--save-map");
+  expect_refused("--load-tsdf " + map, "not a vitamin_e TSDF file");
   EXPECT_TRUE(readFile(map) == map_bytes);
 }
 
@@ -309,10 +309,11 @@ long tokenValue(const std::string& line, const std::string& key) {
 // stats.json summarizes them: the tracks balance from line to line, and the
 // sums in stats.json are those of the lines.
 TEST_F(RunnerSignal, LogFramesAndStatsCarryTheCounters) {
-  const fs::path out = dir_ / "out_counters";
-  const fs::path log = dir_ / "counters.log";
-  const std::string cmd = runner_.string() + " --dataset " + (dir_ / "seq").string() + " --max-frames 30 --quiet" +
-                          " --log-frames --out " + out.string() + " </dev/null >" + log.string() + " 2>&1";
+  const fs::path out = work_dir / "out_counters";
+  const fs::path log = work_dir / "counters.log";
+  const std::string cmd = runner_path.string() + " --dataset " + (work_dir / "seq").string() +
+                          " --max-frames 30 --quiet" + " --log-frames --out " + out.string() + " </dev/null >" +
+                          log.string() + " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << readFile(log);
   std::istringstream lines(readFile(log));
   long born = 0, lost = 0, dropped = 0, triangulated = 0, keyframes = 0, prev_tracks = -1;
