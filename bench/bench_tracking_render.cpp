@@ -480,17 +480,18 @@ int main(int argc, char** argv) try {
     std::printf("  stage %-26s %8.2f ms median %8.2f ms p95\n", kv.first.c_str(), median(kv.second),
                 pct(kv.second, 95));
   }
-  std::printf("{\"points_per_frame_median\":%.0f,\"ms_per_frame_median\":%.3f,\"ms_per_frame_p95\":%.3f,"
-              "\"track_length_median\":%.1f,\"track_length_median_surviving\":%.1f,\"tracked_age_median\":%.1f,\"klt_"
-              "track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
-              "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f,"
-              "\"cpu_ms_per_frame_median\":%.3f,\"klt_cpu_ms_per_frame_median\":%.3f,"
-              "\"drift10_1px_ratio\":%.4f,\"klt_drift10_1px_ratio\":%.4f}\n",
-              median(ours.points), median(ours.ms), pct(ours.ms, 95), median(ours.lengths), median(lengths_tracked),
-              median(live_age), median(klt.lengths), our_ratio, min_tracked, median(klt.points), median(klt.ms),
-              klt_ratio, median(ours.cpu), median(klt.cpu),
-              ours.drift_checked ? (double)ours.drift_inliers / ours.drift_checked : 0.0,
-              klt.drift_checked ? (double)klt.drift_inliers / klt.drift_checked : 0.0);
+  std::printf(
+      "{\"points_per_frame_median\":%.0f,\"ms_per_frame_median\":%.3f,\"ms_per_frame_p95\":%.3f,"
+      "\"track_length_median\":%.1f,\"track_length_median_surviving\":%.1f,\"tracked_age_median\":%.1f,\"klt_"
+      "track_length_median\":%.1f,\"inlier_1px_ratio\":%.4f,\"tracked_per_frame_min\":%d,"
+      "\"klt_points_per_frame_median\":%.0f,\"klt_ms_per_frame_median\":%.3f,\"klt_inlier_1px_ratio\":%.4f,"
+      "\"cpu_ms_per_frame_median\":%.3f,\"klt_cpu_ms_per_frame_median\":%.3f,"
+      "\"drift10_1px_ratio\":%.4f,\"klt_drift10_1px_ratio\":%.4f}\n",
+      median(ours.points), median(ours.ms), pct(ours.ms, 95), median(ours.lengths), median(lengths_tracked),
+      median(live_age), median(klt.lengths), our_ratio, min_tracked, median(klt.points), median(klt.ms), klt_ratio,
+      median(ours.cpu), median(klt.cpu),
+      ours.drift_checked ? static_cast<double>(ours.drift_inliers) / static_cast<double>(ours.drift_checked) : 0.0,
+      klt.drift_checked ? static_cast<double>(klt.drift_inliers) / static_cast<double>(klt.drift_checked) : 0.0);
   return 0;
 } catch (const std::exception& e) {
   vitamin_e::cli::fail(e.what());

@@ -406,7 +406,8 @@ TEST(DenseTracker, PatchFilterReducesJitterOnNoisyImages) {
   ASSERT_GT(e_off.size(), 200u);
   EXPECT_EQ(e_on.size(), e_off.size());
   auto bad = [](const std::vector<double>& e) {
-    return static_cast<double>(std::count_if(e.begin(), e.end(), [](double x) { return x > 1.0; })) / e.size();
+    return static_cast<double>(std::count_if(e.begin(), e.end(), [](double x) { return x > 1.0; })) /
+           static_cast<double>(e.size());
   };
   EXPECT_GT(bad(e_off), 0.02);
   EXPECT_LT(bad(e_on), 0.5 * bad(e_off));
@@ -455,7 +456,8 @@ TEST(DenseTracker, PatchConfirmationEndsJumpedTracks) {
   const Result r_on = run(on, i1), r_off = run(off, i1);
   ASSERT_GT(r_off.tracked, 200);
   auto bad = [](const std::vector<double>& e) {
-    return static_cast<double>(std::count_if(e.begin(), e.end(), [](double x) { return x > 1.0; })) / e.size();
+    return static_cast<double>(std::count_if(e.begin(), e.end(), [](double x) { return x > 1.0; })) /
+           static_cast<double>(e.size());
   };
   EXPECT_LE(bad(r_on.err), bad(r_off.err));
   EXPECT_GT(r_on.tracked, 0.8 * r_off.tracked);
