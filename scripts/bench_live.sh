@@ -18,11 +18,6 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 if ve_wants_help "$@"; then sed -n '2,17p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0; fi
 [ "${VE_NO_BUILD:-0}" = 1 ] || "$VE_ROOT/scripts/build.sh" >&2
-set +u
-source "$VE_WS/devel/setup.bash"
-set -u
-export ROS_IP=127.0.0.1 ROS_HOSTNAME=localhost
-export ROS_HOME="$VE_WS/ros_home" ROS_LOG_DIR="$VE_WS/ros_home/log"
-mkdir -p "$ROS_LOG_DIR"
+ve_ros_env
 exec /usr/bin/python3 "$VE_ROOT/scripts/bench_live.py" --default-render "$(ve_list_path ../renders/V1_01_easy_30s)" \
   --make-bag "$VE_ROOT/scripts/make_bag.sh" --default-out "$VE_WS/bench_live" "$@"

@@ -6,6 +6,20 @@ VE_ROOT="$(cd -P "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VE_WS="${VE_WS:-$VE_ROOT/.ws}"
 export VE_ROOT VE_WS
 ve_die() { echo "error: $*" >&2; exit 2; }
+# ve_ros_env: the built workspace's ROS environment, loopback only, logs inside the workspace
+# (unless ROS_HOME / ROS_LOG_DIR are set). Call it without arguments: setup.bash reads them.
+ve_ros_env() {
+  local had_u=0
+  case $- in *u*) had_u=1 ;; esac
+  set +u
+  source "$VE_WS/devel/setup.bash"
+  [ "$had_u" = 0 ] || set -u
+  export ROS_IP=127.0.0.1 ROS_HOSTNAME=localhost
+  unset ROS_IPV6
+  export ROS_HOME="${ROS_HOME:-$VE_WS/ros_home}"
+  export ROS_LOG_DIR="${ROS_LOG_DIR:-$ROS_HOME/log}"
+  mkdir -p "$ROS_LOG_DIR"
+}
 ve_info() { echo "[vitamin_e] $*" >&2; }
 # ve_list_path P: a path of a suite list as an absolute path: ../shared/... under VE_SHARED,
 # ../renders/... under VE_RENDERS, other relative paths from the repository root ("" stays "").

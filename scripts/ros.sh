@@ -16,15 +16,5 @@ if [ "$1" = roslaunch ]; then
     fi
   done
 fi
-# setup.bash reads the positional parameters: source it with none, run the command after.
-cmd=("$@")
-set --
-set +u
-source "$VE_WS/devel/setup.bash"
-export ROS_IP=127.0.0.1
-export ROS_HOSTNAME=localhost
-unset ROS_IPV6
-export ROS_HOME="${ROS_HOME:-$VE_WS/ros_home}"
-export ROS_LOG_DIR="${ROS_LOG_DIR:-$VE_WS/ros_home/log}"
-mkdir -p "$ROS_LOG_DIR"
-exec "${cmd[@]}"
+ve_ros_env
+exec "$@"

@@ -30,11 +30,8 @@ while [ $# -gt 0 ]; do
 done
 [ -n "$out" ] || ve_die "usage: ./scripts/screenshot_rviz.sh OUT.png [--bag FILE] [--wait S] [--rviz FILE] [--size WxH]"
 [ -f "$VE_WS/devel/setup.bash" ] || "$VE_ROOT/scripts/build.sh" >&2
+ve_ros_env
 set +u
-source "$VE_WS/devel/setup.bash"
-export ROS_IP=127.0.0.1 ROS_HOSTNAME=localhost
-export ROS_HOME="${ROS_HOME:-$VE_WS/ros_home}" ROS_LOG_DIR="${ROS_LOG_DIR:-$VE_WS/ros_home/log}"
-mkdir -p "$ROS_LOG_DIR"
 
 pids=()
 cleanup() {

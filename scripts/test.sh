@@ -21,12 +21,7 @@ export VE_WS
 
 "$VE_ROOT/scripts/build.sh" "${build_args[@]}"
 
-set +u
-source "$VE_WS/devel/setup.bash"
-set -u
-export ROS_IP=127.0.0.1 ROS_HOSTNAME=localhost
-export ROS_HOME="$VE_WS/ros_home" ROS_LOG_DIR="$VE_WS/ros_home/log"
-mkdir -p "$ROS_LOG_DIR"
+ve_ros_env
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1}"
 rm -rf "$VE_WS/build/test_results"
