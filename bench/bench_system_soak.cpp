@@ -129,7 +129,8 @@ int main(int argc, char** argv) try {
   const double s = width / 752.0;
   config.init_min_disparity_px *= s;
   config.keyframe_parallax_px *= s;
-  config.min_init_tracks = std::max(50, static_cast<int>(config.min_init_tracks * s));
+  config.min_init_track_budget_fraction =
+      std::max(50.0 / config.tracker.max_points, config.min_init_track_budget_fraction * s);
   config.map.archive_voxel_m = archive_voxel;
   ve::pipeline::System system(config, camera);
 

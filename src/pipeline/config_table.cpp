@@ -190,7 +190,10 @@ std::vector<Field> configTable(SystemConfig& c) {
 
   // --- pipeline ---
   t.section("pipeline");
-  t.key("min_init_tracks", &c.min_init_tracks, "tracks shared with the reference frame needed to try initializing");
+  t.key("min_init_track_budget_fraction", &c.min_init_track_budget_fraction,
+        "tracks shared with the reference frame needed to try initializing, as a share of tracker.max_points, [0, 1]");
+  t.internal("min_init_tracks", &c.min_init_tracks,
+             "pipeline.min_init_track_budget_fraction x tracker.max_points, at least 8");
   t.key("init_min_disparity_px", &c.init_min_disparity_px,
         "median track displacement before the two-view fit is tried [px]");
   t.key("init_max_pending_frames", &c.init_max_pending_frames,
@@ -266,7 +269,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("min_depression_deg", &g.plane.min_depression_deg,
         "road candidates: map points at least this angle below the optical axis [deg], [0, 90)");
   t.key("inlier_ratio", &g.plane.inlier_ratio, "a road point is within this x the camera height of the plane, (0, 1)");
-  t.key("min_inliers", &g.plane.min_inliers, "fewer road points: no measurement at this keyframe (>= 3)");
+  t.key("min_inlier_budget_fraction", &g.min_inlier_budget_fraction,
+        "fewer road points than this share of tracker.max_points: no measurement at this keyframe, [0, 1]");
+  t.internal("min_inliers", &g.plane.min_inliers, "ground.min_inlier_budget_fraction x tracker.max_points, at least 3");
   t.key("min_inlier_fraction", &g.plane.min_inlier_fraction,
         "fewer road points than this share of the candidates: no measurement, [0, 1]");
   t.key("iterations", &g.plane.iterations, "RANSAC samples of the plane fit (>= 1)");

@@ -12,6 +12,8 @@ void GroundScaleConfig::validate() const {
   if (reference_keyframes < 1) throw std::invalid_argument("ground.reference_keyframes: must be >= 1");
   if (!(max_step_height_ratio > 0.0)) throw std::invalid_argument("ground.max_step_height_ratio: must be > 0");
   if (window < 1) throw std::invalid_argument("ground.window: must be >= 1");
+  if (!(min_inlier_budget_fraction >= 0.0 && min_inlier_budget_fraction <= 1.0))
+    throw std::invalid_argument("ground.min_inlier_budget_fraction: must be in [0, 1]");
   if (!(tolerance >= 0.0 && tolerance < 1.0)) throw std::invalid_argument("ground.tolerance: must be in [0, 1)");
   if (!(gain > 0.0 && gain <= 1.0)) throw std::invalid_argument("ground.gain: must be in (0, 1]");
   if (!(max_change > 0.0 && max_change < 1.0)) throw std::invalid_argument("ground.max_change: must be in (0, 1)");

@@ -14,12 +14,18 @@
 namespace vitamin_e::pipeline {
 
 namespace {
-// Pixel thresholds of the geometry stages are converted with the camera's focal length.
-SystemConfig withCameraFocal(SystemConfig config, const camera::Camera& camera) {
+// What the configuration leaves to the system: pixel thresholds of the geometry stages are
+// converted with the camera's focal length; counts of points follow the tracker's point budget.
+SystemConfig resolvedFor(SystemConfig config, const camera::Camera& camera) {
   const double focal = 0.5 * (camera.fx() + camera.fy());
   config.init.focal_px = focal;
   config.pnp.focal_px = focal;
   config.triangulation.focal_px = focal;
+  const auto share_of_budget = [&config](double fraction, int floor) {
+    return std::max(floor, static_cast<int>(std::lround(fraction * config.tracker.max_points)));
+  };
+  config.min_init_tracks = share_of_budget(config.min_init_track_budget_fraction, kMinInitTracksFloor);
+  config.ground.plane.min_inliers = share_of_budget(config.ground.min_inlier_budget_fraction, kMinRoadInliersFloor);
   return config;
 }
 
@@ -48,7 +54,7 @@ FrameContext contextOf(TrackedFrame&& f) {
 }  // namespace
 
 System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
-    : config(withCameraFocal(cfg, cam)),
+    : config(resolvedFor(cfg, cam)),
       camera(cam),
       front_end(cfg.tracker, cam),
       initializer(config, cam.fx()),

@@ -123,7 +123,8 @@ void SystemConfig::validate() const {
   auto check = [](bool ok, const std::string& what) {
     if (!ok) throw ConfigError(what);
   };
-  check(min_init_tracks >= 8, "pipeline.min_init_tracks must be >= 8");
+  check(min_init_track_budget_fraction >= 0.0 && min_init_track_budget_fraction <= 1.0,
+        "pipeline.min_init_track_budget_fraction must be in [0, 1]");
   check(init_min_disparity_px >= 0.0, "pipeline.init_min_disparity_px must be >= 0");
   check(init_max_pending_frames >= 2, "pipeline.init_max_pending_frames must be >= 2");
   check(min_pose_inliers >= 6, "pipeline.min_pose_inliers must be >= 6");

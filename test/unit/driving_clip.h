@@ -74,7 +74,8 @@ inline DrivingClip renderDrivingClip(const ClipSpec& spec) {
 
 // config/kitti.yaml (tuned at 1226x370) with its pixel-sized settings scaled to
 // an image `scale` times as wide: point budget and grid cells, the dominant-flow
-// image (the same small image size), and the pipeline's pixel thresholds.
+// image (the same small image size), and the pipeline's pixel thresholds. The counts of
+// points (tracks to initialize, road points) follow the point budget by themselves.
 inline pipeline::SystemConfig drivingConfig(double scale = 0.5) {
   pipeline::SystemConfig c = pipeline::loadSystemConfig(std::string(VITAMIN_E_SOURCE_DIR) + "/config/kitti.yaml");
   c.tracker.max_points = static_cast<int>(std::lround(c.tracker.max_points * scale * scale));
@@ -82,9 +83,6 @@ inline pipeline::SystemConfig drivingConfig(double scale = 0.5) {
   c.tracker.brief_scale = std::min(1.0, c.tracker.brief_scale / scale);
   c.init_min_disparity_px *= scale;
   c.keyframe_parallax_px *= scale;
-  c.min_init_tracks = static_cast<int>(std::lround(c.min_init_tracks * scale));
-  // a count of map points, which scale with the point budget
-  c.ground.plane.min_inliers = std::max(3, static_cast<int>(std::lround(c.ground.plane.min_inliers * scale * scale)));
   return c;
 }
 

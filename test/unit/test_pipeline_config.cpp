@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "vitamin_e/camera/camera.h"
+#include "vitamin_e/pipeline/system.h"
 #include "vitamin_e/pipeline/system_config.h"
 
 namespace pl = vitamin_e::pipeline;
@@ -265,7 +267,8 @@ TEST_F(ConfigFile, DenseDepthRangeIsOneSetting) {
 }
 
 TEST_F(ConfigFile, InternalMembersAndBadValuesAreRefusedByName) {
-  for (const std::string& key : {"init:\n  focal_px: 400\n", "pnp:\n  focal_px: 400\n", "ba:\n  max_sweeps: 5\n"}) {
+  for (const std::string& key : {"init:\n  focal_px: 400\n", "pnp:\n  focal_px: 400\n", "ba:\n  max_sweeps: 5\n",
+                                 "pipeline:\n  min_init_tracks: 200\n", "ground:\n  min_inliers: 100\n"}) {
     const std::string err = loadError(key);
     EXPECT_NE(err.find("cannot be set"), std::string::npos) << key << " -> " << err;
   }
@@ -280,6 +283,24 @@ TEST_F(ConfigFile, InternalMembersAndBadValuesAreRefusedByName) {
   EXPECT_NE(err.find("theta"), std::string::npos) << err;
   err = loadError("dense:\n  max_depth: 0.01\n");  // below min_depth
   EXPECT_NE(err.find("max_depth"), std::string::npos) << err;
+}
+
+TEST(ConfigTable, CountsOfPointsFollowThePointBudget) {
+  // A camera tracking a quarter of the points asks for a quarter of the tracks to initialize and
+  // of the road points; a tiny budget keeps the floors an essential matrix and a plane need.
+  const vitamin_e::camera::Camera camera(752, 480, 458.0, 457.0, 367.0, 248.0);
+  pl::SystemConfig config;
+  const auto resolved = [&](int max_points) {
+    config.tracker.max_points = max_points;
+    const pl::System system(config, camera);
+    return std::make_pair(system.config().min_init_tracks, system.config().ground.plane.min_inliers);
+  };
+  EXPECT_EQ(resolved(8000), std::make_pair(200, 100));
+  EXPECT_EQ(resolved(2000), std::make_pair(50, 25));
+  EXPECT_EQ(resolved(100), std::make_pair(pl::kMinInitTracksFloor, pl::kMinRoadInliersFloor));
+  config.min_init_track_budget_fraction = 0.05;
+  config.ground.min_inlier_budget_fraction = 0.01;
+  EXPECT_EQ(resolved(6000), std::make_pair(300, 60));
 }
 
 TEST(ConfigFiles, ShippedSlamConfigsLoad) {

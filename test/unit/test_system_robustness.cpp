@@ -78,7 +78,7 @@ SystemConfig lowResConfig() {
   SystemConfig c;
   c.init_min_disparity_px = 10.0;
   c.keyframe_parallax_px = 10.0;
-  c.min_init_tracks = 100;
+  c.min_init_track_budget_fraction = 100.0 / c.tracker.max_points;
   return c;
 }
 

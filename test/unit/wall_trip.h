@@ -34,7 +34,7 @@ inline pipeline::SystemConfig halfResolutionConfig() {
   pipeline::SystemConfig config;
   config.init_min_disparity_px = 10.0;
   config.keyframe_parallax_px = 10.0;
-  config.min_init_tracks = 100;
+  config.min_init_track_budget_fraction = 100.0 / config.tracker.max_points;
   return config;
 }
 

@@ -19,6 +19,9 @@ namespace vitamin_e::pipeline {
 struct GroundScaleConfig {
   bool enabled = false;
   geometry::GroundPlaneConfig plane;
+  // Road points needed for a measurement, as a share of the point budget (tracker.max_points):
+  // the system sets plane.min_inliers from it.
+  double min_inlier_budget_fraction = 0.0125;
   // Faster than this x the camera height per frame, the road's near points are lost to the
   // image motion and the far ones, triangulated with little parallax, bias the plane: no measurement.
   double max_step_height_ratio = 0.5;

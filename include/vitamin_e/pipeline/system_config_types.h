@@ -25,6 +25,11 @@ fusion::DenseMapperConfig defaultDenseConfig();
 // would; TrackSurvival tells a cut from the survival of the map tracks instead).
 tracking::TrackerConfig defaultTrackerConfig();
 
+// Floors of the counts that follow the point budget: an essential matrix needs 8 tracks to be
+// tried, a plane 3 points.
+constexpr int kMinInitTracksFloor = 8;
+constexpr int kMinRoadInliersFloor = 3;
+
 struct SystemConfig {
   tracking::TrackerConfig tracker = defaultTrackerConfig();  // yaml section "tracker"
   geometry::TwoViewConfig init;                              // yaml section "init"
@@ -40,7 +45,10 @@ struct SystemConfig {
   fusion::DenseMapperConfig dense = defaultDenseConfig();
 
   // --- pipeline (yaml section "pipeline") ---
-  int min_init_tracks = 200;                  // tracks shared with the reference frame needed to try initializing
+  // Tracks shared with the reference frame needed to try initializing, as a share of the point
+  // budget (tracker.max_points): a camera tracking fewer points asks for fewer.
+  double min_init_track_budget_fraction = 0.025;
+  int min_init_tracks = 200;  // set by the system: the fraction x tracker.max_points, at least kMinInitTracksFloor
   double init_min_disparity_px = 20.0;        // median track displacement before the two-view fit is tried
   int init_max_pending_frames = 60;           // frames kept since the reference; beyond it the reference moves on
   int min_pose_inliers = 30;                  // fewer P3P inliers than this: the frame is lost
