@@ -77,15 +77,6 @@ DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, con
   return stats;
 }
 
-DenseMapper::~DenseMapper() {
-  {
-    std::lock_guard<std::mutex> lock(work_mutex_);
-    stop_ = true;
-  }
-  work_cv_.notify_all();
-  if (mesher_thread_.joinable()) mesher_thread_.join();
-}
-
 void DenseMapper::submitFrame(DenseFrame frame, std::size_t max_waiting) {
   if (frame.ids.size() != frame.p_c.size()) {
     throw std::invalid_argument("DenseMapper::submitFrame: ids and points differ in size");
@@ -93,50 +84,30 @@ void DenseMapper::submitFrame(DenseFrame frame, std::size_t max_waiting) {
   if (!frame.map_scaling.isValid()) {
     throw std::invalid_argument("DenseMapper::submitFrame: the map scaling is not finite and positive");
   }
-  std::unique_lock<std::mutex> lock(work_mutex_);
-  if (!mesher_thread_.joinable()) mesher_thread_ = std::thread([this] { meshLoop(); });
-  done_cv_.wait(lock, [&] { return work_.size() < std::max<std::size_t>(1, max_waiting); });
-  work_.push_back(std::move(frame));
-  ++work_stats_.submitted;
-  work_cv_.notify_one();
+  {
+    std::lock_guard<std::mutex> lock(work_stats_mutex_);
+    ++work_stats_.submitted;
+  }
+  mesh_worker_.post(std::move(frame), max_waiting, WhenFull::kWait);
 }
 
-void DenseMapper::meshLoop() {
-  for (;;) {
-    DenseFrame job;
-    {
-      std::unique_lock<std::mutex> lock(work_mutex_);
-      work_cv_.wait(lock, [this] { return stop_ || !work_.empty(); });
-      if (work_.empty()) return;  // stopped and nothing left
-      job = std::move(work_.front());
-      work_.pop_front();
-      working_ = true;
-    }
-    done_cv_.notify_all();
-    const double cpu0 = threadCpuMs();
-    const DenseFrameStats s = addFrame(job);
-    const double cpu = threadCpuMs() - cpu0;
-    {
-      std::lock_guard<std::mutex> lock(work_mutex_);
-      working_ = false;
-      work_stats_.mesh_cpu_ms += cpu;
-      if (s.integrated) {
-        ++work_stats_.meshed;
-        work_stats_.mesh_ms += s.mesh_ms + s.denoise_ms;
-        work_stats_.frame_mesh_ms.push_back(s.mesh_ms + s.denoise_ms);
-      }
-    }
-    done_cv_.notify_all();
+void DenseMapper::meshSubmitted(const DenseFrame& frame) {
+  const double cpu0 = threadCpuMs();
+  const DenseFrameStats s = addFrame(frame);
+  const double cpu = threadCpuMs() - cpu0;
+  std::lock_guard<std::mutex> lock(work_stats_mutex_);
+  work_stats_.mesh_cpu_ms += cpu;
+  if (s.integrated) {
+    ++work_stats_.meshed;
+    work_stats_.mesh_ms += s.mesh_ms + s.denoise_ms;
+    work_stats_.frame_mesh_ms.push_back(s.mesh_ms + s.denoise_ms);
   }
 }
 
-void DenseMapper::waitMeshed() {
-  std::unique_lock<std::mutex> lock(work_mutex_);
-  done_cv_.wait(lock, [this] { return work_.empty() && !working_; });
-}
+void DenseMapper::waitMeshed() { mesh_worker_.waitIdle(); }
 
 DenseWorkStats DenseMapper::workStats() const {
-  std::lock_guard<std::mutex> lock(work_mutex_);
+  std::lock_guard<std::mutex> lock(work_stats_mutex_);
   return work_stats_;
 }
 
@@ -170,11 +141,7 @@ MeshBlockUpdate DenseMapper::takeChangedBlocks() { return integrator_->takeChang
 TsdfIntegratorStats DenseMapper::integratorStats() const { return integrator_->stats(); }
 
 void DenseMapper::reset() {
-  {
-    std::lock_guard<std::mutex> lock(work_mutex_);
-    work_.clear();
-  }
-  done_cv_.notify_all();
+  mesh_worker_.clear();
   waitMeshed();
   integrator_->reset();
   denoiser_.reset();

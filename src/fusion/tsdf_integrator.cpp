@@ -1,6 +1,5 @@
 #include "vitamin_e/fusion/tsdf_integrator.h"
 
-#include <algorithm>
 #include <stdexcept>
 
 #include "vitamin_e/common/timing.h"
@@ -14,16 +13,11 @@ void TsdfIntegratorConfig::validate() const {
 
 TsdfIntegrator::TsdfIntegrator(const TsdfIntegratorConfig& config) : config_(config), volume_(config.tsdf) {
   config_.validate();
-  if (config_.asynchronous) worker_ = std::thread([this] { run(); });
-}
-
-TsdfIntegrator::~TsdfIntegrator() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stop_ = true;
+  if (config_.asynchronous) {
+    // Frames take the queue's places; a scaling is small and must not be lost.
+    worker_ = std::make_unique<SerialWorker<Job>>([this](Job& job) { integrateJob(job); },
+                                                  [](const Job& job) { return !job.is_scaling; });
   }
-  queue_cv_.notify_all();
-  if (worker_.joinable()) worker_.join();
 }
 
 void TsdfIntegrator::integrateJob(const Job& job) {
@@ -40,7 +34,7 @@ void TsdfIntegrator::integrateJob(const Job& job) {
   }
   const double cpu = threadCpuMs() - cpu0;
   const double ms = elapsedMs(t0);
-  std::lock_guard<std::mutex> lock(queue_mutex_);
+  std::lock_guard<std::mutex> lock(stats_mutex_);
   ++stats_.integrated;
   stats_.last_integration_ms = ms;
   stats_.integration_ms += ms;
@@ -51,7 +45,7 @@ void TsdfIntegrator::submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_
                             const meshing::PinholeImage& image) {
   Job job{std::move(mesh), T_w_c, image};
   {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
+    std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.submitted;
   }
   enqueue(std::move(job));
@@ -66,55 +60,20 @@ void TsdfIntegrator::submitScaling(const MapScaling& volume_to_map) {
 }
 
 void TsdfIntegrator::enqueue(Job job) {
-  if (!config_.asynchronous) {
+  if (!worker_) {
     integrateJob(job);
     return;
   }
-  {
-    std::unique_lock<std::mutex> lock(queue_mutex_);
-    // Frames count against the capacity; a scaling is small and must not be lost.
-    const auto frames = [this] {
-      return static_cast<std::size_t>(
-          std::count_if(queue_.begin(), queue_.end(), [](const Job& j) { return !j.is_scaling; }));
-    };
-    if (!job.is_scaling && frames() >= config_.queue_capacity) {
-      if (config_.block_when_full) {
-        idle_cv_.wait(lock, [&] { return frames() < config_.queue_capacity || stop_; });
-      } else {
-        queue_.erase(std::find_if(queue_.begin(), queue_.end(), [](const Job& j) { return !j.is_scaling; }));
-        ++stats_.dropped;
-      }
-    }
-    queue_.push_back(std::move(job));
-  }
-  queue_cv_.notify_one();
-}
-
-void TsdfIntegrator::run() {
-  for (;;) {
-    Job job;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (queue_.empty()) return;  // stop_ and nothing left
-      job = std::move(queue_.front());
-      queue_.pop_front();
-      busy_ = true;
-    }
-    idle_cv_.notify_all();
-    integrateJob(job);
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      busy_ = false;
-    }
-    idle_cv_.notify_all();
+  const std::size_t dropped = worker_->post(std::move(job), config_.queue_capacity,
+                                            config_.block_when_full ? WhenFull::kWait : WhenFull::kDropOldest);
+  if (dropped > 0) {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.dropped += dropped;
   }
 }
 
 void TsdfIntegrator::flush() {
-  if (!config_.asynchronous) return;
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  idle_cv_.wait(lock, [this] { return queue_.empty() && !busy_; });
+  if (worker_) worker_->waitIdle();
 }
 
 TriangleMesh TsdfIntegrator::extractMesh() {
@@ -145,16 +104,15 @@ MapScaling TsdfIntegrator::loadVolume(const std::string& path) {
 }
 
 TsdfIntegratorStats TsdfIntegrator::stats() const {
-  std::lock_guard<std::mutex> lock(queue_mutex_);
+  std::lock_guard<std::mutex> lock(stats_mutex_);
   return stats_;
 }
 
 void TsdfIntegrator::reset() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stats_.dropped += static_cast<std::size_t>(
-        std::count_if(queue_.begin(), queue_.end(), [](const Job& j) { return !j.is_scaling; }));
-    queue_.clear();
+  if (worker_) {
+    const std::size_t dropped = worker_->clear();
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.dropped += dropped;
   }
   flush();
   std::lock_guard<std::mutex> lock(volume_mutex_);

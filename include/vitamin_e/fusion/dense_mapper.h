@@ -13,15 +13,13 @@
 // map is rescaled (a ground-scale correction) the volume is rescaled with it
 // before the frame is fused: the mesh stays in one scale, the map's current one.
 #include <Eigen/Geometry>
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "vitamin_e/common/serial_worker.h"
 #include "vitamin_e/fusion/triangle_mesh.h"
 #include "vitamin_e/fusion/tsdf_integrator.h"
 #include "vitamin_e/meshing/frame_mesher.h"
@@ -92,7 +90,7 @@ class DenseMapper {
   // between flush()es.
   void submitFrame(DenseFrame frame, std::size_t max_waiting = 4);
   DenseWorkStats workStats() const;
-  ~DenseMapper();  // finishes the submitted frames, then joins the meshing thread
+  ~DenseMapper() = default;  // the meshing thread finishes the submitted frames, then joins
   DenseMapper(const DenseMapper&) = delete;
   DenseMapper& operator=(const DenseMapper&) = delete;
   // The map was scaled by `factor` about `centre` (map coordinates): so is the
@@ -115,7 +113,7 @@ class DenseMapper {
   const MapScaling& scaling() const { return scaling_; }
 
  private:
-  void meshLoop();
+  void meshSubmitted(const DenseFrame& frame);  // on the meshing thread
   void waitMeshed();
 
   DenseMapperConfig config_;
@@ -124,17 +122,14 @@ class DenseMapper {
   meshing::FrameMesher pruner_;
   meshing::NltgvDenoiser denoiser_;
   std::unique_ptr<TsdfIntegrator> integrator_;
-  // the meshing thread of submitFrame()
-  mutable std::mutex work_mutex_;
-  std::condition_variable work_cv_, done_cv_;
-  std::deque<DenseFrame> work_;
-  bool working_ = false;
-  bool stop_ = false;
+  mutable std::mutex work_stats_mutex_;
   DenseWorkStats work_stats_;
-  std::thread mesher_thread_;
   // Touched by whichever thread meshes (the caller's with addFrame, the meshing thread's with submitFrame).
   MapScaling scaling_;        // the volume's, as submitted to the integrator
   MapScaling input_scaling_;  // DenseFrame::map_scaling of the last frame
+  // The meshing thread of submitFrame() (started at the first frame); declared last: it
+  // finishes and joins before the members it uses are destroyed.
+  SerialWorker<DenseFrame> mesh_worker_{[this](DenseFrame& frame) { meshSubmitted(frame); }};
 };
 
 }  // namespace vitamin_e::fusion

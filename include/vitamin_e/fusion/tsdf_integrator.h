@@ -5,11 +5,10 @@
 // configured). In synchronous mode submit() integrates immediately. A change
 // of the map's scaling is queued in order with the frames and never dropped.
 // extractMesh() / saveMesh() / takeChangedBlocks() may be called from any thread.
-#include <condition_variable>
-#include <deque>
+#include <memory>
 #include <mutex>
-#include <thread>
 
+#include "vitamin_e/common/serial_worker.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
 
 namespace vitamin_e::fusion {
@@ -34,7 +33,7 @@ struct TsdfIntegratorStats {
 class TsdfIntegrator {
  public:
   explicit TsdfIntegrator(const TsdfIntegratorConfig& config = {});
-  ~TsdfIntegrator();  // finishes the queued frames, then joins
+  ~TsdfIntegrator() = default;  // the worker finishes the queued frames, then joins
   TsdfIntegrator(const TsdfIntegrator&) = delete;
   TsdfIntegrator& operator=(const TsdfIntegrator&) = delete;
 
@@ -61,20 +60,17 @@ class TsdfIntegrator {
     bool is_scaling = false;  // not a frame: the volume's scaling becomes `scaling`
     MapScaling scaling;
   };
-  void run();
   void integrateJob(const Job& job);
   void enqueue(Job job);
 
   TsdfIntegratorConfig config_;
   TsdfVolume volume_;
   mutable std::mutex volume_mutex_;
-  mutable std::mutex queue_mutex_;
-  std::condition_variable queue_cv_, idle_cv_;
-  std::deque<Job> queue_;
-  bool busy_ = false;
-  bool stop_ = false;
+  mutable std::mutex stats_mutex_;
   TsdfIntegratorStats stats_;
-  std::thread worker_;
+  // Asynchronous only; declared last: destroyed (queue finished, thread joined) before the
+  // volume and the stats it writes.
+  std::unique_ptr<SerialWorker<Job>> worker_;
 };
 
 }  // namespace vitamin_e::fusion

@@ -1,0 +1,136 @@
+// SerialWorker: jobs run on one other thread in the order posted; a full line waits or drops
+// its oldest counted job, never an uncounted one; clear() and the destructor. A gate holds the
+// worker in its first job, so that what waits is known without any timing.
+#include <gtest/gtest.h>
+
+#include <future>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "vitamin_e/common/serial_worker.h"
+
+namespace {
+
+using vitamin_e::SerialWorker;
+using vitamin_e::WhenFull;
+
+// Job values >= 0 count against the capacity; negative ones (a "scaling") do not.
+struct Recorder {
+  std::mutex mutex;
+  std::vector<int> ran;
+  std::vector<std::thread::id> threads;
+  std::shared_future<void> gate;  // the job 0 waits for it
+  void run(const int& job) {
+    if (job == 0 && gate.valid()) gate.wait();
+    std::lock_guard<std::mutex> lock(mutex);
+    ran.push_back(job);
+    threads.push_back(std::this_thread::get_id());
+  }
+  std::vector<int> taken() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return ran;
+  }
+};
+
+std::unique_ptr<SerialWorker<int>> makeWorker(Recorder* r) {
+  return std::make_unique<SerialWorker<int>>([r](int& job) { r->run(job); }, [](const int& job) { return job >= 0; });
+}
+
+TEST(SerialWorker, RunsJobsInPostOrderOnOneOtherThread) {
+  Recorder r;
+  auto worker = makeWorker(&r);
+  for (int i = 1; i <= 50; ++i) EXPECT_EQ(worker->post(i, 100, WhenFull::kWait), 0u);
+  worker->waitIdle();
+  std::vector<int> expected;
+  for (int i = 1; i <= 50; ++i) expected.push_back(i);
+  EXPECT_EQ(r.taken(), expected);
+  for (const auto& id : r.threads) {
+    EXPECT_EQ(id, r.threads.front());
+    EXPECT_NE(id, std::this_thread::get_id());
+  }
+}
+
+TEST(SerialWorker, AFullLineDropsItsOldestCountedJobNeverAnUncountedOne) {
+  Recorder r;
+  std::promise<void> open;
+  r.gate = open.get_future().share();
+  auto worker = makeWorker(&r);
+  worker->post(0, 1, WhenFull::kWait);
+  worker->post(1, 1, WhenFull::kWait);  // returns once job 0 has been taken: job 0 is running
+  EXPECT_EQ(worker->post(-1, 2, WhenFull::kDropOldest), 0u);
+  EXPECT_EQ(worker->post(2, 2, WhenFull::kDropOldest), 0u);  // line: 1, -1, 2
+  EXPECT_EQ(worker->post(3, 2, WhenFull::kDropOldest), 1u);  // drops 1 (not -1)
+  EXPECT_EQ(worker->post(-2, 2, WhenFull::kDropOldest), 0u);
+  EXPECT_EQ(worker->post(4, 2, WhenFull::kDropOldest), 1u);  // drops 2
+  open.set_value();
+  worker->waitIdle();
+  EXPECT_EQ(r.taken(), (std::vector<int>{0, -1, 3, -2, 4}));
+}
+
+TEST(SerialWorker, AWaitingPostLosesNothing) {
+  Recorder r;
+  std::promise<void> open;
+  r.gate = open.get_future().share();
+  auto worker = makeWorker(&r);
+  worker->post(0, 1, WhenFull::kWait);
+  worker->post(1, 1, WhenFull::kWait);  // job 0 is running, 1 waits: the line is full
+  std::promise<void> posted;
+  std::thread poster([&] {
+    EXPECT_EQ(worker->post(2, 1, WhenFull::kWait), 0u);  // waits for job 1 to leave the line
+    posted.set_value();
+  });
+  open.set_value();
+  posted.get_future().wait();
+  poster.join();
+  worker->waitIdle();
+  EXPECT_EQ(r.taken(), (std::vector<int>{0, 1, 2}));
+}
+
+TEST(SerialWorker, ClearDropsTheWaitingJobsAndCountsTheCountedOnes) {
+  Recorder r;
+  std::promise<void> open;
+  r.gate = open.get_future().share();
+  auto worker = makeWorker(&r);
+  worker->post(0, 1, WhenFull::kWait);
+  worker->post(1, 1, WhenFull::kWait);  // job 0 is running
+  worker->post(-1, 10, WhenFull::kWait);
+  worker->post(2, 10, WhenFull::kWait);
+  EXPECT_EQ(worker->clear(), 2u);  // jobs 1 and 2; -1 is dropped too, uncounted
+  open.set_value();
+  worker->waitIdle();
+  EXPECT_EQ(r.taken(), (std::vector<int>{0}));
+  worker->post(5, 1, WhenFull::kWait);  // still working after a clear
+  worker->waitIdle();
+  EXPECT_EQ(r.taken(), (std::vector<int>{0, 5}));
+}
+
+TEST(SerialWorker, TheDestructorRunsWhatWaitsThenJoins) {
+  Recorder r;
+  std::promise<void> open;
+  r.gate = open.get_future().share();
+  auto worker = makeWorker(&r);
+  worker->post(0, 1, WhenFull::kWait);
+  worker->post(1, 1, WhenFull::kWait);
+  worker->post(2, 10, WhenFull::kWait);
+  open.set_value();
+  worker.reset();
+  EXPECT_EQ(r.taken(), (std::vector<int>{0, 1, 2}));
+}
+
+TEST(SerialWorker, WithoutAPostThereIsNoThreadAndNothingToWaitFor) {
+  Recorder r;
+  auto worker = makeWorker(&r);
+  worker->waitIdle();
+  EXPECT_EQ(worker->clear(), 0u);
+  worker.reset();
+  EXPECT_TRUE(r.taken().empty());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
