@@ -30,48 +30,22 @@ constexpr std::size_t kBagQueueFrames = 4;
 
 }  // namespace
 
+// A nodelet that cannot run says why and throws: the loader unloads it and its load request
+// fails, so that `nodelet load` (and roslaunch with it) reports the failure.
+std::runtime_error TrackingNodelet::fatal(const std::string& why) const {
+  NODELET_FATAL("%s", why.c_str());
+  return std::runtime_error(why);
+}
+
 void TrackingNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
-  // A nodelet that cannot run says why and throws: the loader unloads it and its load
-  // request fails, so that `nodelet load` (and roslaunch with it) reports the failure.
-  auto fail = [this](const std::string& why) {
-    NODELET_FATAL("%s", why.c_str());
-    return std::runtime_error(why);
-  };
-  ParamNotes notes;
-  try {
-    params_ = readTrackingParams(
-        [&pnh](const std::string& name, XmlRpc::XmlRpcValue* value) { return pnh.getParam(name, *value); }, &notes);
-  } catch (const std::exception& e) {
-    throw fail(std::string(e.what()) + " (the nodelet does not start: fix the parameter and restart)");
-  }
-  for (const auto& w : notes.warnings) NODELET_WARN("%s", w.c_str());
-  for (const auto& i : notes.infos) NODELET_INFO("%s", i.c_str());
-  if (params_.debug_frame_delay_s > 0.0) {
-    NODELET_WARN("~debug_frame_delay %.3f s: every frame is held that long before it is processed (for tests)",
-                 params_.debug_frame_delay_s);
-  }
-  logMapFrameSource();
+  const TrackingFiles files = loadConfiguration(pnh);
   // The SLAM thread's input: live, the newest frame only (a frame arriving while one waits
   // replaces it); bags, a few frames and the callback waits when they are full (the rest wait in
   // the subscriber's queue, ~queue_size).
   queue_ = std::make_unique<SlamQueue<QueuedFrame>>(params_.process_all_frames ? kBagQueueFrames : 1,
                                                     !params_.process_all_frames);
-  TrackingFiles files;
-  try {
-    files = loadTrackingFiles(params_);
-  } catch (const std::exception& e) {
-    throw fail(std::string(e.what()) + " (the nodelet does not start: fix the file or the parameter and restart)");
-  }
-  system_config_ = files.system_config;
-  loaded_map_ = std::move(files.map);
-  NODELET_INFO("SLAM config %s:\n%s", params_.config_file.empty() ? "(defaults)" : params_.config_file.c_str(),
-               system_config_.describe().c_str());
-  if (loaded_map_) {
-    NODELET_INFO("~load_map %s: %s", params_.load_map.c_str(), vitamin_e::map::mapFileHeader(*loaded_map_).c_str());
-  }
-
   // Images on their own callback queue and thread: in bag mode the callback waits while the
   // SLAM queue is full, and nothing else (services, reconfigure, camera_info, IMU) waits with it.
   ros::NodeHandle image_nh(nh);
@@ -105,6 +79,42 @@ void TrackingNodelet::onInit() {
   }
   startDiagnostics(nh, pnh);
   if (runner_) startSlam();
+  subscribe(nh, image_nh, pnh);
+  started_ = true;
+}
+
+TrackingFiles TrackingNodelet::loadConfiguration(ros::NodeHandle& pnh) {
+  ParamNotes notes;
+  try {
+    params_ = readTrackingParams(
+        [&pnh](const std::string& name, XmlRpc::XmlRpcValue* value) { return pnh.getParam(name, *value); }, &notes);
+  } catch (const std::exception& e) {
+    throw fatal(std::string(e.what()) + " (the nodelet does not start: fix the parameter and restart)");
+  }
+  for (const auto& w : notes.warnings) NODELET_WARN("%s", w.c_str());
+  for (const auto& i : notes.infos) NODELET_INFO("%s", i.c_str());
+  if (params_.debug_frame_delay_s > 0.0) {
+    NODELET_WARN("~debug_frame_delay %.3f s: every frame is held that long before it is processed (for tests)",
+                 params_.debug_frame_delay_s);
+  }
+  logMapFrameSource();
+  TrackingFiles files;
+  try {
+    files = loadTrackingFiles(params_);
+  } catch (const std::exception& e) {
+    throw fatal(std::string(e.what()) + " (the nodelet does not start: fix the file or the parameter and restart)");
+  }
+  system_config_ = files.system_config;
+  loaded_map_ = std::move(files.map);
+  NODELET_INFO("SLAM config %s:\n%s", params_.config_file.empty() ? "(defaults)" : params_.config_file.c_str(),
+               system_config_.describe().c_str());
+  if (loaded_map_) {
+    NODELET_INFO("~load_map %s: %s", params_.load_map.c_str(), vitamin_e::map::mapFileHeader(*loaded_map_).c_str());
+  }
+  return files;
+}
+
+void TrackingNodelet::subscribe(ros::NodeHandle& nh, ros::NodeHandle& image_nh, ros::NodeHandle& pnh) {
   // camera_info on the images' queue: it comes just before its image, and in one thread it is
   // taken first (on another queue the first images would find no calibration yet). Kept after
   // the calibration, to say when it changes.
@@ -120,7 +130,6 @@ void TrackingNodelet::onInit() {
     // disable() (destructor) wakes the wait at once; the timeout only bounds an idle wait.
     while (image_queue_.isEnabled()) image_queue_.callAvailable(ros::WallDuration(1.0));
   });
-  started_ = true;
 }
 
 void TrackingNodelet::logMapFrameSource() const {
@@ -235,10 +244,6 @@ void TrackingNodelet::createSession(const vitamin_e::camera::Camera& camera) {
 }
 
 void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
-  const auto fail = [this](const std::string& why) {
-    NODELET_FATAL("%s", why.c_str());
-    return std::runtime_error(why);
-  };
   try {
     vitamin_e::pipeline::RunnerOptions runner;
     runner.pipelined = params_.pipelined;
@@ -246,7 +251,7 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
         system_config_, camera, params_.session(), runner,
         [this](FrameResult&& result, std::uint64_t ticket) { onResult(std::move(result), ticket); });
   } catch (const std::exception& e) {
-    throw fail(std::string("cannot start the SLAM system: ") + e.what());
+    throw fatal(std::string("cannot start the SLAM system: ") + e.what());
   }
   NODELET_INFO("camera: %s; %s", camera.describe().c_str(),
                params_.pipelined ? "pipelined: frame k+1 is tracked while frame k is mapped (two threads)"
@@ -261,8 +266,8 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
       runner_->system().loadMap(*loaded_map_);
     } catch (const std::exception& e) {
       runner_.reset();
-      throw fail("~load_map '" + params_.load_map + "': " + e.what() +
-                 " (nothing is processed: fix the file or the parameter and restart)");
+      throw fatal("~load_map '" + params_.load_map + "': " + e.what() +
+                  " (nothing is processed: fix the file or the parameter and restart)");
     }
     loaded_map_.reset();
     NODELET_INFO("relocalizing in the loaded map %s%s", params_.load_map.c_str(),

@@ -89,6 +89,11 @@ class TrackingNodelet : public nodelet::Nodelet {
   // onInit throws std::runtime_error (after a FATAL saying why) when the nodelet cannot run:
   // nodelet::Loader then unloads it and `nodelet load` (or tracking_node) exits non-zero.
   void onInit() override;
+  std::runtime_error fatal(const std::string& why) const;  // NODELET_FATAL, then the exception to throw
+  // ~parameters and the files they name (config, calibration, map), read and logged.
+  TrackingFiles loadConfiguration(ros::NodeHandle& pnh);
+  // camera_info, IMU and images, and the images' callback thread: last, when everything runs.
+  void subscribe(ros::NodeHandle& nh, ros::NodeHandle& image_nh, ros::NodeHandle& pnh);
   void logMapFrameSource() const;
   void advertise(ros::NodeHandle& pnh);
   void startDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh);
