@@ -151,7 +151,8 @@ std::size_t Map::keyframeToRetire() const {
   for (int k = 0; k < n; ++k) index_of.emplace(keyframes_[static_cast<std::size_t>(k)].frame_index, k);
   // Per keyframe, the parallax the points of the newest keyframe would lose without it:
   // for each point, its widest angle between two observing keyframes' rays, with and
-  // without the keyframe (only the two keyframes of the widest pair can lose any).
+  // without the keyframe (only the two keyframes of the widest pair can lose any); or,
+  // retire_fewest_reliant, how many points would keep less than half their widest angle.
   std::vector<double> loss(static_cast<std::size_t>(n), 0.0);
   std::vector<Eigen::Vector3d> rays;
   std::vector<int> observer;
@@ -170,7 +171,11 @@ std::size_t Map::keyframeToRetire() const {
     int a = -1, b = -1;
     const double widest = widestAngle(rays, -1, &a, &b);
     if (a < 0) continue;
-    for (int e : {a, b}) loss[static_cast<std::size_t>(observer[e])] += widest - widestAngle(rays, e);
+    for (int e : {a, b}) {
+      const double without = widestAngle(rays, e);
+      loss[static_cast<std::size_t>(observer[e])] +=
+          config_.retire_fewest_reliant ? (without < 0.5 * widest ? 1.0 : 0.0) : widest - without;
+    }
   }
   // The cheapest; among equals (none of them sees the current points) the oldest.
   int best = 0;

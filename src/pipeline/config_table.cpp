@@ -179,6 +179,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("retire_least_parallax", &m.retire_least_parallax,
         "true: a full window retires the keyframe whose removal costs the current points least parallax; "
         "false: the oldest");
+  t.key("retire_fewest_reliant", &m.retire_fewest_reliant,
+        "experimental, with retire_least_parallax: the keyframe fewest current points rely on leaves (without it "
+        "their widest angle would be under half), not the one whose removal costs least angle");
   t.key("archive_voxel_m", &m.archive_voxel_m,
         "retired points archived: 0 = all, else one per voxel of this size (map units)");
   t.key("max_archive_points", &m.max_archive_points,

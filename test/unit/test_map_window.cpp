@@ -317,3 +317,32 @@ TEST(Map, KeyframesThatSeeNoPointLeaveOldestFirst) {
   for (std::uint64_t k = 2; k < 6; ++k) map.addKeyframe(keyframeAt(k, 1.0 + 0.01 * double(k)));
   EXPECT_EQ(windowFrames(map), (std::vector<std::uint64_t>{3, 4, 5}));
 }
+
+TEST(Map, TheReliantRuleRetiresTheKeyframeFewestPointsNeed) {
+  // A camera going back and forth. Keyframe 0 widens the angle of 40 points a little (the
+  // newest keyframes see them from far enough apart); keyframe 1 is the only wide view of 2
+  // points. The parallax rule keeps keyframe 0 for the angle the 40 points would lose; the
+  // reliant rule keeps keyframe 1, which the 2 points cannot do without.
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> many, few;
+  for (std::uint64_t i = 0; i < 40; ++i) {
+    many.emplace_back(i, Eigen::Vector3d(-1.0 + 0.1 * double(i), 0.5 * double(i % 3) - 0.5, 8.0));
+  }
+  for (std::uint64_t i = 0; i < 2; ++i) few.emplace_back(100 + i, Eigen::Vector3d(0.5 + 0.5 * double(i), 1.0, 8.0));
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> all = many;
+  all.insert(all.end(), few.begin(), few.end());
+  for (bool reliant : {false, true}) {
+    MapConfig cfg;
+    cfg.max_keyframes = 4;
+    cfg.retire_fewest_reliant = reliant;
+    Map map(cfg);
+    for (const auto& p : all) map.addLandmark(newLandmark(p.first, p.second, 1));
+    map.addKeyframe(keyframeObserving(0, Eigen::Vector3d(0, 0, 0), many));
+    map.addKeyframe(keyframeObserving(1, Eigen::Vector3d(1.0, 0, 0), few));
+    map.addKeyframe(keyframeObserving(2, Eigen::Vector3d(0.3, 0, 0), many));
+    map.addKeyframe(keyframeObserving(3, Eigen::Vector3d(0.35, 0, 0), many));
+    map.addKeyframe(keyframeObserving(4, Eigen::Vector3d(2.0, 0, 0), all));
+    const std::vector<std::uint64_t> expected =
+        reliant ? std::vector<std::uint64_t>{1, 2, 3, 4} : std::vector<std::uint64_t>{0, 2, 3, 4};
+    EXPECT_EQ(windowFrames(map), expected) << (reliant ? "reliant rule" : "parallax rule");
+  }
+}

@@ -89,6 +89,10 @@ struct MapConfig {
   // makes a keyframe per frame); never one of the newest keep_newest_keyframes. false: the
   // oldest leaves (euroc.yaml: on a drone's whole render the parallax rule cost accuracy).
   bool retire_least_parallax = true;
+  // Experimental, with retire_least_parallax: what a keyframe's removal costs is the number of the
+  // newest keyframe's points that rely on it (without it their widest angle is less than half),
+  // not the angle they lose. Off: not yet better on every camera (docs/ROBUSTNESS.md).
+  bool retire_fewest_reliant = false;
   int keep_newest_keyframes = 3;  // >= 1
   double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
