@@ -38,6 +38,21 @@ std::unique_ptr<SerialWorker<int>> makeWorker(Recorder* r) {
   return std::make_unique<SerialWorker<int>>([r](int& job) { r->run(job); }, [](const int& job) { return job >= 0; });
 }
 
+// A worker held in job 0 (at the gate) with job 1 waiting behind it: posting 1 with capacity 1
+// returns only once job 0 has left the line, i.e. runs. open_.set_value() lets it go on.
+class HeldWorker : public ::testing::Test {
+ protected:
+  HeldWorker() {
+    recorder_.gate = open_.get_future().share();
+    worker_ = makeWorker(&recorder_);
+    worker_->post(0, 1, WhenFull::kWait);
+    worker_->post(1, 1, WhenFull::kWait);
+  }
+  Recorder recorder_;
+  std::promise<void> open_;
+  std::unique_ptr<SerialWorker<int>> worker_;
+};
+
 TEST(SerialWorker, RunsJobsInPostOrderOnOneOtherThread) {
   Recorder r;
   auto worker = makeWorker(&r);
@@ -52,71 +67,47 @@ TEST(SerialWorker, RunsJobsInPostOrderOnOneOtherThread) {
   }
 }
 
-TEST(SerialWorker, AFullLineDropsItsOldestCountedJobNeverAnUncountedOne) {
-  Recorder r;
-  std::promise<void> open;
-  r.gate = open.get_future().share();
-  auto worker = makeWorker(&r);
-  worker->post(0, 1, WhenFull::kWait);
-  worker->post(1, 1, WhenFull::kWait);  // returns once job 0 has been taken: job 0 is running
-  EXPECT_EQ(worker->post(-1, 2, WhenFull::kDropOldest), 0u);
-  EXPECT_EQ(worker->post(2, 2, WhenFull::kDropOldest), 0u);  // line: 1, -1, 2
-  EXPECT_EQ(worker->post(3, 2, WhenFull::kDropOldest), 1u);  // drops 1 (not -1)
-  EXPECT_EQ(worker->post(-2, 2, WhenFull::kDropOldest), 0u);
-  EXPECT_EQ(worker->post(4, 2, WhenFull::kDropOldest), 1u);  // drops 2
-  open.set_value();
-  worker->waitIdle();
-  EXPECT_EQ(r.taken(), (std::vector<int>{0, -1, 3, -2, 4}));
+TEST_F(HeldWorker, AFullLineDropsItsOldestCountedJobNeverAnUncountedOne) {
+  EXPECT_EQ(worker_->post(-1, 2, WhenFull::kDropOldest), 0u);
+  EXPECT_EQ(worker_->post(2, 2, WhenFull::kDropOldest), 0u);  // line: 1, -1, 2
+  EXPECT_EQ(worker_->post(3, 2, WhenFull::kDropOldest), 1u);  // drops 1 (not -1)
+  EXPECT_EQ(worker_->post(-2, 2, WhenFull::kDropOldest), 0u);
+  EXPECT_EQ(worker_->post(4, 2, WhenFull::kDropOldest), 1u);  // drops 2
+  open_.set_value();
+  worker_->waitIdle();
+  EXPECT_EQ(recorder_.taken(), (std::vector<int>{0, -1, 3, -2, 4}));
 }
 
-TEST(SerialWorker, AWaitingPostLosesNothing) {
-  Recorder r;
-  std::promise<void> open;
-  r.gate = open.get_future().share();
-  auto worker = makeWorker(&r);
-  worker->post(0, 1, WhenFull::kWait);
-  worker->post(1, 1, WhenFull::kWait);  // job 0 is running, 1 waits: the line is full
+TEST_F(HeldWorker, AWaitingPostLosesNothing) {
   std::promise<void> posted;
   std::thread poster([&] {
-    EXPECT_EQ(worker->post(2, 1, WhenFull::kWait), 0u);  // waits for job 1 to leave the line
+    EXPECT_EQ(worker_->post(2, 1, WhenFull::kWait), 0u);  // waits for job 1 to leave the line
     posted.set_value();
   });
-  open.set_value();
+  open_.set_value();
   posted.get_future().wait();
   poster.join();
-  worker->waitIdle();
-  EXPECT_EQ(r.taken(), (std::vector<int>{0, 1, 2}));
+  worker_->waitIdle();
+  EXPECT_EQ(recorder_.taken(), (std::vector<int>{0, 1, 2}));
 }
 
-TEST(SerialWorker, ClearDropsTheWaitingJobsAndCountsTheCountedOnes) {
-  Recorder r;
-  std::promise<void> open;
-  r.gate = open.get_future().share();
-  auto worker = makeWorker(&r);
-  worker->post(0, 1, WhenFull::kWait);
-  worker->post(1, 1, WhenFull::kWait);  // job 0 is running
-  worker->post(-1, 10, WhenFull::kWait);
-  worker->post(2, 10, WhenFull::kWait);
-  EXPECT_EQ(worker->clear(), 2u);  // jobs 1 and 2; -1 is dropped too, uncounted
-  open.set_value();
-  worker->waitIdle();
-  EXPECT_EQ(r.taken(), (std::vector<int>{0}));
-  worker->post(5, 1, WhenFull::kWait);  // still working after a clear
-  worker->waitIdle();
-  EXPECT_EQ(r.taken(), (std::vector<int>{0, 5}));
+TEST_F(HeldWorker, ClearDropsTheWaitingJobsAndCountsTheCountedOnes) {
+  worker_->post(-1, 10, WhenFull::kWait);
+  worker_->post(2, 10, WhenFull::kWait);
+  EXPECT_EQ(worker_->clear(), 2u);  // jobs 1 and 2; -1 is dropped too, uncounted
+  open_.set_value();
+  worker_->waitIdle();
+  EXPECT_EQ(recorder_.taken(), (std::vector<int>{0}));
+  worker_->post(5, 1, WhenFull::kWait);  // still working after a clear
+  worker_->waitIdle();
+  EXPECT_EQ(recorder_.taken(), (std::vector<int>{0, 5}));
 }
 
-TEST(SerialWorker, TheDestructorRunsWhatWaitsThenJoins) {
-  Recorder r;
-  std::promise<void> open;
-  r.gate = open.get_future().share();
-  auto worker = makeWorker(&r);
-  worker->post(0, 1, WhenFull::kWait);
-  worker->post(1, 1, WhenFull::kWait);
-  worker->post(2, 10, WhenFull::kWait);
-  open.set_value();
-  worker.reset();
-  EXPECT_EQ(r.taken(), (std::vector<int>{0, 1, 2}));
+TEST_F(HeldWorker, TheDestructorRunsWhatWaitsThenJoins) {
+  worker_->post(2, 10, WhenFull::kWait);
+  open_.set_value();
+  worker_.reset();
+  EXPECT_EQ(recorder_.taken(), (std::vector<int>{0, 1, 2}));
 }
 
 TEST(SerialWorker, WithoutAPostThereIsNoThreadAndNothingToWaitFor) {
