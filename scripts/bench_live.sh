@@ -5,8 +5,9 @@
 #   drops     % of the bag's images that got no /tracking/status (the live queue keeps the newest)
 #   reloc     relocalizations and re-initializations (the last status)
 #   latency   p50 / p95 [ms]: wall time from an image's arrival at the benchmark's node to the
-#             arrival of the tracker's status for that image (one process, one clock: what a
-#             consumer of the poses sees; the bag's stamps are not wall time without --clock)
+#             arrival of the tracker's pose for that image (~pose; one process, one clock: what a
+#             consumer of the poses sees; the bag's stamps are not wall time without --clock);
+#             and p95 to the arrival of its status, which follows the frame's map work
 #   tracked   frames with a pose / frames processed
 #   ./scripts/bench_live.sh [--render DIR | --bag BAG --calibration YAML] [--modes sequential,pipelined]
 #                           [--loads idle,busy] [--runs N] [--out DIR]

@@ -44,6 +44,17 @@ const char* toString(RelocalizationOutcome outcome) {
   return "unknown";
 }
 
+FramePose poseOf(const FrameResult& result) {
+  FramePose pose;
+  pose.frame_index = result.frame_index;
+  pose.timestamp = result.timestamp;
+  pose.T_w_c = result.T_w_c;
+  pose.T_w_c_covariance = result.T_w_c_covariance;
+  pose.T_w_c_covariance_valid = result.T_w_c_covariance_valid;
+  pose.keyframe = result.diagnostics.keyframe;
+  return pose;
+}
+
 void framePointsInCamera(const FrameResult& result, std::vector<std::uint64_t>* ids,
                          std::vector<Eigen::Vector3d>* p_c) {
   ids->clear();

@@ -7,17 +7,20 @@
 namespace vitamin_e::pipeline {
 
 PipelinedSystem::PipelinedSystem(const SystemConfig& config, const camera::Camera& camera,
-                                 const PipelinedOptions& options, ResultCallback on_result)
-    : PipelinedSystem(std::make_unique<System>(config, camera), options, std::move(on_result)) {}
+                                 const PipelinedOptions& options, ResultCallback on_result,
+                                 System::PoseListener on_pose)
+    : PipelinedSystem(std::make_unique<System>(config, camera), options, std::move(on_result), std::move(on_pose)) {}
 
-PipelinedSystem::PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result)
-    : PipelinedSystem(std::unique_ptr<System>(), options, std::move(on_result), &system) {}
+PipelinedSystem::PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result,
+                                 System::PoseListener on_pose)
+    : PipelinedSystem(std::unique_ptr<System>(), options, std::move(on_result), std::move(on_pose), &system) {}
 
 PipelinedSystem::PipelinedSystem(std::unique_ptr<System> owned, const PipelinedOptions& options,
-                                 ResultCallback on_result, System* borrowed)
+                                 ResultCallback on_result, System::PoseListener on_pose, System* borrowed)
     : owned_(std::move(owned)),
       system_(owned_ ? owned_.get() : borrowed),
       on_result_(std::move(on_result)),
+      on_pose_(std::move(on_pose)),
       input_(options.input_capacity, options.drop_oldest),
       tracked_(options.tracked_capacity, false) {
   tracking_thread_ = std::thread([this] { trackingLoop(); });
@@ -74,7 +77,7 @@ void PipelinedSystem::mappingLoop() {
   while (std::optional<TrackedFrame> frame = tracked_.pop()) {
     setBusy(&mapping_busy_, true);
     const double cpu0 = threadCpuMs();
-    FrameResult result = system_->mapFrame(std::move(*frame));
+    FrameResult result = system_->mapFrame(std::move(*frame), on_pose_);
     const double cpu = threadCpuMs() - cpu0;
     if (on_result_) on_result_(std::move(result));
     std::lock_guard<std::mutex> lock(count_mutex_);

@@ -5,8 +5,11 @@
 namespace vitamin_e::pipeline {
 
 SessionRunner::SessionRunner(const SystemConfig& config, const camera::Camera& camera, const SessionConfig& session,
-                             const RunnerOptions& options, ResultCallback on_result)
-    : session_(config, camera, session), options_(options), on_result_(std::move(on_result)) {
+                             const RunnerOptions& options, ResultCallback on_result, PoseCallback on_pose)
+    : session_(config, camera, session),
+      options_(options),
+      on_result_(std::move(on_result)),
+      on_pose_(std::move(on_pose)) {
   if (options_.queue_frames == 0) throw std::invalid_argument("SessionRunner: queue_frames must be >= 1");
   if (options_.pipelined) startPipeline();
 }
@@ -20,8 +23,10 @@ void SessionRunner::startPipeline() {
   p.input_capacity = options_.queue_frames;
   p.tracked_capacity = options_.queue_frames;
   p.drop_oldest = false;
-  pipeline_ = std::make_unique<PipelinedSystem>(session_.system(), p,
-                                                [this](FrameResult result) { onPipelineResult(std::move(result)); });
+  System::PoseListener on_pose;
+  if (on_pose_) on_pose = [this](const FramePose& pose) { onPipelinePose(pose); };
+  pipeline_ = std::make_unique<PipelinedSystem>(
+      session_.system(), p, [this](FrameResult result) { onPipelineResult(std::move(result)); }, std::move(on_pose));
 }
 
 SessionStamp SessionRunner::admit(double timestamp) {
@@ -37,7 +42,9 @@ SessionStamp SessionRunner::admit(double timestamp) {
 bool SessionRunner::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
                             std::uint64_t ticket) {
   if (!pipeline_) {
-    FrameResult result = session_.system().process(image, timestamp, timestamp_text);
+    System::PoseListener on_pose;
+    if (on_pose_) on_pose = [this, ticket](const FramePose& pose) { on_pose_(pose, ticket); };
+    FrameResult result = session_.system().process(image, timestamp, timestamp_text, on_pose);
     if (on_result_) on_result_(std::move(result), ticket);
     return true;
   }
@@ -69,6 +76,16 @@ void SessionRunner::onPipelineResult(FrameResult&& result) {
     tickets_.pop_front();
   }
   if (on_result_) on_result_(std::move(result), ticket);
+}
+
+void SessionRunner::onPipelinePose(const FramePose& pose) {
+  std::uint64_t ticket = 0;
+  {
+    // The frame being mapped is the oldest without a result.
+    std::lock_guard<std::mutex> lock(tickets_mutex_);
+    ticket = tickets_.front();
+  }
+  on_pose_(pose, ticket);
 }
 
 void SessionRunner::flush() {

@@ -72,7 +72,7 @@ TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, co
   return f;
 }
 
-FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
+FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose) {
   FrameResult result;
   result.timestamp = f.timestamp;
   result.frame_index = f.frame_index - front_end.frameIndexOffset();  // this stream's own count
@@ -89,7 +89,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f) {
 
   const auto t_start = TimingClock::now();
   switch (recovery.state()) {
-    case TrackingState::kTracking: track(frame, ended, &result); break;
+    case TrackingState::kTracking: track(frame, ended, on_pose, &result); break;
     case TrackingState::kRelocalizing: relocalize(frame, &result); break;
     default: initialize(frame, &result);
   }
@@ -341,26 +341,15 @@ bool System::Impl::resume(FrameContext& frame, const Eigen::Isometry3d& T_w_gues
   return true;
 }
 
-void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameResult* result) {
+void System::Impl::track(FrameContext& frame, const EndedTracks& ended, const PoseListener& on_pose,
+                         FrameResult* result) {
   markTracksSeen(frame);
   const PoseEstimate pose = estimatePose(frame, ended, result);
   if (!pose.ok) {
     lose(frame, RecoveryEvent::kPoseFailed, pose.why, result);
     return;
   }
-  Eigen::Isometry3d T_w_c = pose.T_w_c;
-  {
-    // Localized: new tracks where old map points project take them over.
-    ScopedTimer timer(&timings, "reuse", &result->timing_ms);
-    result->diagnostics.reused = reuseMapPoints(frame, T_w_c, false);
-  }
-  {
-    ScopedTimer timer(&timings, "ba", &result->timing_ms);
-    const FrameRefinement refined = refine(frame, T_w_c);
-    T_w_c = refined.T_w_c;
-    result->T_w_c_covariance = refined.covariance;
-    result->T_w_c_covariance_valid = refined.covariance_valid;
-  }
+  Eigen::Isometry3d T_w_c = refineTrackedPose(frame, pose.T_w_c, result);
   // A pose must be finite and must not jump: a step far beyond the scene depth
   // is a failure, not motion (after dropped frames: per frame interval).
   const double step = (T_w_c.translation() - motion.lastPose().translation()).norm();
@@ -372,13 +361,35 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, FrameRes
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   motion.update(T_w_c, frame.timestamp);
+  const KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
+  if (on_pose) {
+    // The result so far holds the pose's covariance; the pose and the keyframe flag are these.
+    FramePose pose = poseOf(*result);
+    pose.T_w_c = T_w_c;
+    pose.keyframe = decision.needed;
+    on_pose(pose);
+  }
   {
     ScopedTimer timer(&timings, "map", &result->timing_ms);
-    T_w_c = extendMap(frame, T_w_c, &result->diagnostics);
+    T_w_c = extendMap(frame, T_w_c, decision, &result->diagnostics);
   }
   report(RecoveryEvent::kPoseFound, frame, result);
   result->pose_valid = true;
   result->T_w_c = T_w_c;
+}
+
+Eigen::Isometry3d System::Impl::refineTrackedPose(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
+                                                  FrameResult* result) {
+  {
+    // Localized: new tracks where old map points project take them over.
+    ScopedTimer timer(&timings, "reuse", &result->timing_ms);
+    result->diagnostics.reused = reuseMapPoints(frame, T_w_c, false);
+  }
+  ScopedTimer timer(&timings, "ba", &result->timing_ms);
+  const FrameRefinement refined = refine(frame, T_w_c);
+  result->T_w_c_covariance = refined.covariance;
+  result->T_w_c_covariance_valid = refined.covariance_valid;
+  return refined.T_w_c;
 }
 
 PoseEstimate System::Impl::estimatePose(const FrameContext& frame, const EndedTracks& ended, FrameResult* result) {
@@ -414,8 +425,8 @@ PoseEstimate System::Impl::estimatePose(const FrameContext& frame, const EndedTr
   return pose;
 }
 
-Eigen::Isometry3d System::Impl::extendMap(const FrameContext& frame, Eigen::Isometry3d T_w_c, FrameDiagnostics* d) {
-  const KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
+Eigen::Isometry3d System::Impl::extendMap(const FrameContext& frame, Eigen::Isometry3d T_w_c,
+                                          const KeyframeDecision& decision, FrameDiagnostics* d) {
   d->keyframe_parallax_px = decision.parallax_px;
   if (decision.needed) {
     T_w_c = insertKeyframe(frame, T_w_c, d);
@@ -538,15 +549,18 @@ System::System(const SystemConfig& config, const camera::Camera& camera) {
 
 System::~System() = default;
 
-FrameResult System::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  return impl_->mapFrame(impl_->trackFrame(image, timestamp, timestamp_text));
+FrameResult System::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
+                            const PoseListener& on_pose) {
+  return impl_->mapFrame(impl_->trackFrame(image, timestamp, timestamp_text), on_pose);
 }
 
 TrackedFrame System::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
   return impl_->trackFrame(image, timestamp, timestamp_text);
 }
 
-FrameResult System::mapFrame(TrackedFrame&& frame) { return impl_->mapFrame(std::move(frame)); }
+FrameResult System::mapFrame(TrackedFrame&& frame, const PoseListener& on_pose) {
+  return impl_->mapFrame(std::move(frame), on_pose);
+}
 
 void System::reset() { impl_->reset(); }
 

@@ -43,7 +43,7 @@ struct System::Impl {
   Impl(const SystemConfig& config, const camera::Camera& camera);
 
   TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text);
-  FrameResult mapFrame(TrackedFrame&& frame);
+  FrameResult mapFrame(TrackedFrame&& frame, const PoseListener& on_pose);
   void reset();
   bool restartTracking();
 
@@ -53,11 +53,16 @@ struct System::Impl {
   void startMap(InitialMap* m, const FrameContext& frame);  // the initializer's map becomes the map
   // The first map's frames get their poses; returns the current frame's.
   Eigen::Isometry3d localizeInitialFrames(const InitialMap& m, const FrameContext& frame);
-  void track(FrameContext& frame, const EndedTracks& ended, FrameResult* result);
+  // on_pose (may be empty) hears the pose before the map work.
+  void track(FrameContext& frame, const EndedTracks& ended, const PoseListener& on_pose, FrameResult* result);
+  // At an estimated pose: map points reused by new tracks, the per-frame BA; returns the
+  // refined pose (its covariance in *result).
+  Eigen::Isometry3d refineTrackedPose(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameResult* result);
   PoseEstimate estimatePose(const FrameContext& frame, const EndedTracks& ended, FrameResult* result);
-  // At a tracked pose: a keyframe when one is needed, the scale held to the road,
+  // At a tracked pose: a keyframe when `decision` says so, the scale held to the road,
   // the scene depth updated. Returns the frame's pose (moved by a keyframe BA).
-  Eigen::Isometry3d extendMap(const FrameContext& frame, Eigen::Isometry3d T_w_c, FrameDiagnostics* d);
+  Eigen::Isometry3d extendMap(const FrameContext& frame, Eigen::Isometry3d T_w_c, const KeyframeDecision& decision,
+                              FrameDiagnostics* d);
   // The frame as a keyframe: triangulation, window BA, relocalizer index.
   // Returns the frame's pose after the window BA.
   Eigen::Isometry3d insertKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <mutex>
 
 #include "vitamin_e/pipeline/session.h"
 #include "vitamin_e/pipeline/session_runner.h"
@@ -314,6 +315,102 @@ TEST(SystemSessionRunner, PipelinedTimeJumpAndReset) {
   ASSERT_EQ(got.results.size(), before + 30);
   EXPECT_EQ(got.tickets.back(), 29u);
   EXPECT_GT(runner.system().framesTracked(), 20u) << "the new map is tracked";
+}
+
+// The early poses (on_pose): each tracked frame's pose before its map work, with its ticket,
+// before that frame's result and after the previous one's; the pose the result has unless a
+// keyframe's window BA moved it (a little); the results the same as without a listener.
+namespace {
+
+struct RunnerEvent {
+  bool is_pose = false;
+  std::uint64_t ticket = 0;
+  pl::FramePose pose;
+  pl::FrameResult result;
+};
+
+void expectPosesBeforeTheirResults(const std::vector<RunnerEvent>& events, std::size_t frames) {
+  std::size_t results = 0, poses = 0, moved_keyframes = 0;
+  double most_moved = 0.0;
+  for (std::size_t k = 0; k < events.size(); ++k) {
+    const RunnerEvent& e = events[k];
+    if (!e.is_pose) {
+      ++results;
+      continue;
+    }
+    ++poses;
+    ASSERT_LT(k + 1, events.size()) << "a pose without its result";
+    const RunnerEvent& next = events[k + 1];
+    ASSERT_FALSE(next.is_pose) << "two poses of ticket " << e.ticket;
+    ASSERT_EQ(next.ticket, e.ticket) << "the pose's own result comes next";
+    const pl::FrameResult& r = next.result;
+    ASSERT_TRUE(r.pose_valid) << e.ticket;
+    EXPECT_EQ(r.reason, pl::StateReason::kTracked) << e.ticket;
+    EXPECT_EQ(e.pose.frame_index, r.frame_index);
+    EXPECT_DOUBLE_EQ(e.pose.timestamp, r.timestamp);
+    EXPECT_EQ(e.pose.keyframe, r.diagnostics.keyframe) << e.ticket;
+    EXPECT_EQ(e.pose.T_w_c_covariance_valid, r.T_w_c_covariance_valid);
+    if (e.pose.keyframe) {
+      // Before the window BA, which moves the keyframe by a small part of the scene depth (1 here).
+      const double moved = (e.pose.T_w_c.translation() - r.T_w_c.translation()).norm();
+      EXPECT_LT(moved, 5e-4) << e.ticket;
+      most_moved = std::max(most_moved, moved);
+      moved_keyframes += e.pose.T_w_c.isApprox(r.T_w_c, 1e-12) ? 0 : 1;
+    } else {
+      EXPECT_TRUE(e.pose.T_w_c.isApprox(r.T_w_c, 1e-12)) << e.ticket;
+    }
+  }
+  EXPECT_EQ(results, frames);
+  std::size_t tracked = 0;
+  for (const RunnerEvent& e : events) tracked += !e.is_pose && e.result.reason == pl::StateReason::kTracked;
+  EXPECT_EQ(poses, tracked) << "every frame tracked from the map has its early pose";
+  EXPECT_GT(tracked, frames / 2);
+  std::printf("%zu results, %zu early poses, %zu of them keyframes the window BA moved (at most %.5f)\n", results,
+              poses, moved_keyframes, most_moved);
+  EXPECT_GT(moved_keyframes, 0u) << "no early pose before a window BA: announced after the map work?";
+}
+
+std::vector<RunnerEvent> runWithPoses(const pl::RunnerOptions& options) {
+  const Frames& f = frames();
+  std::vector<RunnerEvent> events;
+  std::mutex mutex;
+  {
+    pl::SessionRunner runner(
+        pl::SystemConfig{}, f.camera, {}, options,
+        [&](pl::FrameResult&& r, std::uint64_t ticket) {
+          std::lock_guard<std::mutex> lock(mutex);
+          events.push_back({false, ticket, {}, std::move(r)});
+        },
+        [&](const pl::FramePose& p, std::uint64_t ticket) {
+          std::lock_guard<std::mutex> lock(mutex);
+          events.push_back({true, ticket, p, {}});
+        });
+    feed(&runner, 0, f.images.size());
+    runner.flush();
+  }
+  return events;
+}
+
+}  // namespace
+
+TEST(SystemSessionRunner, SequentialPosesComeBeforeTheirResultsWhichDoNotChange) {
+  const std::vector<RunnerEvent> events = runWithPoses({});
+  expectPosesBeforeTheirResults(events, frames().images.size());
+  // The same results as without a listener, to the bit.
+  const Frames& f = frames();
+  pl::Session session(pl::SystemConfig{}, f.camera);
+  std::size_t i = 0;
+  for (const RunnerEvent& e : events) {
+    if (e.is_pose) continue;
+    const pl::SessionFrame plain = session.process(f.images[i], f.stamps[i]);
+    ASSERT_EQ(plain.result.pose_valid, e.result.pose_valid) << i;
+    if (plain.result.pose_valid) EXPECT_TRUE(plain.result.T_w_c.isApprox(e.result.T_w_c, 1e-15)) << i;
+    ++i;
+  }
+}
+
+TEST(SystemSessionRunner, PipelinedPosesComeBeforeTheirResults) {
+  expectPosesBeforeTheirResults(runWithPoses({true, 1}), frames().images.size());
 }
 
 int main(int argc, char** argv) {

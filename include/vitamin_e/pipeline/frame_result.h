@@ -133,4 +133,22 @@ struct FrameResult {
   FrameDiagnostics diagnostics;             // the counters of the map's life this frame
 };
 
+// A tracked frame's pose as soon as it is known, before the frame's map work (a keyframe's
+// triangulation and window BA, the relocalizer's index): what a live caller publishes at
+// once (System::process's PoseListener). The frame's FrameResult follows with the pose the
+// map work settled on: the same one, unless the frame became a keyframe (the window BA moves
+// it a little) or the ground held the map's scale.
+struct FramePose {
+  std::uint64_t frame_index = 0;  // as FrameResult::frame_index
+  double timestamp = 0.0;
+  Eigen::Isometry3d T_w_c = Eigen::Isometry3d::Identity();
+  Eigen::Matrix<double, 6, 6> T_w_c_covariance = Eigen::Matrix<double, 6, 6>::Zero();  // as FrameResult's
+  bool T_w_c_covariance_valid = false;
+  bool keyframe = false;  // the frame becomes a keyframe (FrameDiagnostics::keyframe)
+};
+
+// The pose of a result with a valid one (pose_valid), for callers that publish poses from
+// results and from early FramePoses alike.
+FramePose poseOf(const FrameResult& result);
+
 }  // namespace vitamin_e::pipeline

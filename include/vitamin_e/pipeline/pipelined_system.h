@@ -32,12 +32,15 @@ class PipelinedSystem {
  public:
   using ResultCallback = std::function<void(FrameResult)>;
 
-  // on_result is called on the mapping thread, once per processed frame, in order.
+  // on_result is called on the mapping thread, once per processed frame, in order; on_pose
+  // (optional) on the same thread before it, with the pose of a tracked frame before its
+  // map work (System::PoseListener).
   PipelinedSystem(const SystemConfig& config, const camera::Camera& camera, const PipelinedOptions& options,
-                  ResultCallback on_result);
+                  ResultCallback on_result, System::PoseListener on_pose = {});
   // The same on a System the caller owns (it must outlive this, and nothing else may
   // use it until flush() or the destructor has returned).
-  PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result);
+  PipelinedSystem(System& system, const PipelinedOptions& options, ResultCallback on_result,
+                  System::PoseListener on_pose = {});
   ~PipelinedSystem();  // finishes the submitted frames, then joins both threads
   PipelinedSystem(const PipelinedSystem&) = delete;
   PipelinedSystem& operator=(const PipelinedSystem&) = delete;
@@ -54,7 +57,7 @@ class PipelinedSystem {
   void waitUntilNoneWaiting();
   std::size_t droppedFrames() const;
   // CPU time [ms] the two threads spent in trackFrame and in mapFrame so far
-  // (on_result not included; the tracker's helper threads not either).
+  // (on_pose included, on_result not; the tracker's helper threads not either).
   struct StageCpu {
     double tracking_ms = 0.0;
     double mapping_ms = 0.0;
@@ -75,7 +78,7 @@ class PipelinedSystem {
     std::string timestamp_text;
   };
   PipelinedSystem(std::unique_ptr<System> owned, const PipelinedOptions& options, ResultCallback on_result,
-                  System* borrowed = nullptr);
+                  System::PoseListener on_pose, System* borrowed = nullptr);
   void trackingLoop();
   void setBusy(bool* stage, bool busy);  // under count_mutex_, waking the waiters
   void mappingLoop();
@@ -83,6 +86,7 @@ class PipelinedSystem {
   std::unique_ptr<System> owned_;  // null when the caller owns the System
   System* system_;
   ResultCallback on_result_;
+  System::PoseListener on_pose_;
   BoundedQueue<Input> input_;
   BoundedQueue<TrackedFrame> tracked_;
   std::thread tracking_thread_, mapping_thread_;

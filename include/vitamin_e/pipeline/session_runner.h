@@ -6,6 +6,8 @@
 // once per processed frame, in order, with the caller's ticket for the frame:
 //   sequential: before process() returns, on the caller's thread;
 //   pipelined:  later, on the pipeline's mapping thread.
+// on_pose (optional) hears a tracked frame's pose before its map work, on the same thread
+// and with the same ticket, before that frame's on_result (System::PoseListener).
 // Whatever reads or changes the session or its System (segments, counters, maps,
 // localization only, reset) waits for the pipeline first: flush(), or the calls
 // here that flush themselves (admit() of a stamp going back, reset()).
@@ -37,9 +39,10 @@ struct RunnerOptions {
 class SessionRunner {
  public:
   using ResultCallback = std::function<void(FrameResult&& result, std::uint64_t ticket)>;
+  using PoseCallback = std::function<void(const FramePose& pose, std::uint64_t ticket)>;
 
   SessionRunner(const SystemConfig& config, const camera::Camera& camera, const SessionConfig& session,
-                const RunnerOptions& options, ResultCallback on_result);
+                const RunnerOptions& options, ResultCallback on_result, PoseCallback on_pose = {});
   ~SessionRunner();  // the submitted frames are finished (their on_result called) first
   SessionRunner(const SessionRunner&) = delete;
   SessionRunner& operator=(const SessionRunner&) = delete;
@@ -70,11 +73,13 @@ class SessionRunner {
 
  private:
   void onPipelineResult(FrameResult&& result);
+  void onPipelinePose(const FramePose& pose);
   void startPipeline();
 
   Session session_;
   RunnerOptions options_;
   ResultCallback on_result_;
+  PoseCallback on_pose_;
   // The tickets of the frames in the pipeline, in order (it keeps every frame and its order).
   mutable std::mutex tickets_mutex_;
   std::deque<std::uint64_t> tickets_;

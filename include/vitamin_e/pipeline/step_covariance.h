@@ -30,5 +30,8 @@ struct StepCovarianceModel {
 // T_w_c_covariance_valid); false otherwise (e.g. the first frame of a map, a relocalized one).
 bool stepCovariance(const FrameResult& result, Eigen::Matrix<double, 6, 6>* covariance,
                     const StepCovarianceModel& model = {});
+// The same for a pose announced before its frame's map work (System::PoseListener).
+bool stepCovariance(const FramePose& pose, Eigen::Matrix<double, 6, 6>* covariance,
+                    const StepCovarianceModel& model = {});
 
 }  // namespace vitamin_e::pipeline

@@ -4,6 +4,7 @@
 //   FrameResult r = slam.process(gray_image, t);
 // process() is synchronous (sequential mode: deterministic). Not thread-safe:
 // call it from one thread at a time.
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,17 +40,26 @@ class System {
   System(const System&) = delete;
   System& operator=(const System&) = delete;
 
+  // Hears a tracked frame's pose as soon as it is known, before the frame's map work
+  // (a keyframe's triangulation and window BA): a live caller publishes it then, and the
+  // pose's latency is not the keyframe's. Called on the thread of process() / mapFrame(),
+  // at most once per frame, before they return; not for the frames that initialize a map
+  // or are relocalized (their pose comes with the result only). It must not call the System.
+  using PoseListener = std::function<void(const FramePose&)>;
+
   // Processes one frame. image: CV_8UC1 of the calibration's size (throws
   // std::invalid_argument otherwise). timestamp in seconds, increasing
   // (a frame whose stamp does not increase is skipped: state kLost, message set).
-  FrameResult process(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
+  // The results do not depend on on_pose.
+  FrameResult process(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "",
+                      const PoseListener& on_pose = {});
 
   // The two stages of process(), as PipelinedSystem runs them on two threads:
   // trackFrame (tracking, undistortion) and mapFrame (initialization, pose, BA,
   // map). One thread may call each; they share only thread-safe state (the
   // timings and the tracks the mapping stage ends). process() = mapFrame(trackFrame()).
   TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
-  FrameResult mapFrame(TrackedFrame&& frame);
+  FrameResult mapFrame(TrackedFrame&& frame, const PoseListener& on_pose = {});
 
   // Forgets map and tracks; the trajectory so far is kept.
   void reset();

@@ -249,7 +249,8 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
     runner.pipelined = params_.pipelined;
     runner_ = std::make_unique<vitamin_e::pipeline::SessionRunner>(
         system_config_, camera, params_.session(), runner,
-        [this](FrameResult&& result, std::uint64_t ticket) { onResult(std::move(result), ticket); });
+        [this](FrameResult&& result, std::uint64_t ticket) { onResult(std::move(result), ticket); },
+        [this](const vitamin_e::pipeline::FramePose& pose, std::uint64_t ticket) { onPose(pose, ticket); });
   } catch (const std::exception& e) {
     throw fatal(std::string("cannot start the SLAM system: ") + e.what());
   }
@@ -572,8 +573,26 @@ void TrackingNodelet::onResult(FrameResult&& result, std::uint64_t ticket) {
       if (p.has_position) p.p_w = T_map_w_ * p.p_w;
     }
   }
-  publishResult(result, frame.frame, ms);
+  publishResult(result, frame.frame, ms, frame.pose_published);
   previous_pose_valid_ = result.pose_valid;
+}
+
+void TrackingNodelet::onPose(const vitamin_e::pipeline::FramePose& pose, std::uint64_t ticket) {
+  if (!have_map_) return;  // the map frame is fixed at the first result: the pose goes out with it
+  std_msgs::Header header;
+  {
+    std::lock_guard<std::mutex> lock(pending_mutex_);
+    const auto it = pending_.find(ticket);
+    if (it == pending_.end()) return;
+    it->second.pose_published = true;
+    header = it->second.frame.header;
+    options_ = it->second.options;
+    frame_id_ = it->second.frame_id;
+  }
+  if (!body_tf_sent_) publishBodyTransform();
+  vitamin_e::pipeline::FramePose in_map = pose;
+  in_map.T_w_c = T_map_w_ * pose.T_w_c;
+  publishFramePose(in_map, header);
 }
 
 void TrackingNodelet::resetMap(const std::string& why) {

@@ -84,6 +84,7 @@ class TrackingNodelet : public nodelet::Nodelet {
     vitamin_e::TrackingConfig options;  // the reconfigure values as of the frame
     std::string frame_id;               // its camera frame
     std::chrono::steady_clock::time_point start;
+    bool pose_published = false;  // its pose went out before the result (onPose)
   };
 
   // onInit throws std::runtime_error (after a FATAL saying why) when the nodelet cannot run:
@@ -138,6 +139,9 @@ class TrackingNodelet : public nodelet::Nodelet {
   void processFrame(const QueuedFrame& frame);
   // [results] A frame's result: map frame, publishing.
   void onResult(vitamin_e::pipeline::FrameResult&& result, std::uint64_t ticket);
+  // A tracked frame's pose before its map work: published at once (pose, odometry, path, tf),
+  // so that a keyframe's window BA is not in the pose's latency. [results]
+  void onPose(const vitamin_e::pipeline::FramePose& pose, std::uint64_t ticket);
   // The session: [results] state (the SLAM thread reads it only while runner_ is idle).
   const vitamin_e::pipeline::Session& session() const { return runner_->session(); }
   // A new map (~reset; runner_ idle): the session's next segment, the map frame and the path
@@ -158,8 +162,12 @@ class TrackingNodelet : public nodelet::Nodelet {
   void publishBodyTransform();
 
   // Publishing (tracking_publish.cpp); SLAM thread. `result` is in the map frame.
-  void publishResult(const vitamin_e::pipeline::FrameResult& result, const QueuedFrame& frame, double ms);
-  void publishPose(const vitamin_e::pipeline::FrameResult& result, const std_msgs::Header& header);
+  // pose_published: the frame's pose went out already (onPose), the rest of the result goes now.
+  void publishResult(const vitamin_e::pipeline::FrameResult& result, const QueuedFrame& frame, double ms,
+                     bool pose_published);
+  // pose, odometry, path and tf of a frame (pose in the map frame), the latency noted.
+  void publishFramePose(const vitamin_e::pipeline::FramePose& pose, const std_msgs::Header& header);
+  void publishPose(const vitamin_e::pipeline::FramePose& pose, const std_msgs::Header& header);
   void publishPath(const geometry_msgs::PoseStampedConstPtr& stamped);
   void publishTf(const Eigen::Isometry3d& T_map_c, const ros::Time& stamp);
   void publishPoints(const vitamin_e::pipeline::FrameResult& result, const std_msgs::Header& header);

@@ -21,10 +21,12 @@
 
 namespace vitamin_e_ros {
 
+using vitamin_e::pipeline::FramePose;
 using vitamin_e::pipeline::FrameResult;
 using vitamin_e::pipeline::TrackingState;
 
-void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame& frame, double ms) {
+void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame& frame, double ms,
+                                    bool pose_published) {
   const std_msgs::Header& header = frame.header;
   vitamin_e::TrackingStatusPtr status(new vitamin_e::TrackingStatus);
   status->header = header;
@@ -62,8 +64,6 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
     stats_.mapped = result.num_mapped;
     stats_.map_size = result.map_size;
     stats_.init_retries = session().initRetries();
-    if (result.pose_valid) stats_.latency_s.push_back((ros::Time::now() - header.stamp).toSec());
-    while (stats_.latency_s.size() > 200) stats_.latency_s.pop_front();
     while (stats_.processed_wall.size() > 2000) stats_.processed_wall.pop_front();
   }
 
@@ -77,8 +77,7 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
   const vitamin_e::fusion::DenseFrame dense = dense_input_.next(result, to_mesher && result.pose_valid);
   if (result.pose_valid) {
     if (isFinite(result.T_w_c)) {
-      publishPose(result, header);
-      if (options_.publish_tf) publishTf(result.T_w_c, header.stamp);
+      if (!pose_published) publishFramePose(vitamin_e::pipeline::poseOf(result), header);
       if (options_.publish_points && points_pub_.getNumSubscribers() > 0) publishPoints(result, header);
       if (to_mesher) publishFrame(dense, header);
     } else {
@@ -95,8 +94,22 @@ void TrackingNodelet::publishResult(const FrameResult& result, const QueuedFrame
   if (tracking_image_pub_.getNumSubscribers() > 0) publishTrackingImage(result, header, frame.gray);
 }
 
-void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Header& header) {
-  const geometry_msgs::Pose pose = toPoseMsg(result.T_w_c);
+void TrackingNodelet::publishFramePose(const FramePose& pose, const std_msgs::Header& header) {
+  if (!isFinite(pose.T_w_c)) {
+    NODELET_ERROR_THROTTLE(2.0, "frame %lu: non-finite pose not published",
+                           static_cast<unsigned long>(pose.frame_index));
+    return;
+  }
+  publishPose(pose, header);
+  if (options_.publish_tf) publishTf(pose.T_w_c, header.stamp);
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.latency_s.push_back((ros::Time::now() - header.stamp).toSec());
+  while (stats_.latency_s.size() > 200) stats_.latency_s.pop_front();
+}
+
+void TrackingNodelet::publishPose(const FramePose& frame_pose, const std_msgs::Header& header) {
+  const Eigen::Isometry3d& T_map_c = frame_pose.T_w_c;
+  const geometry_msgs::Pose pose = toPoseMsg(T_map_c);
   geometry_msgs::PoseStampedPtr stamped(new geometry_msgs::PoseStamped);
   stamped->header.stamp = header.stamp;
   stamped->header.frame_id = params_.map_frame;
@@ -108,7 +121,7 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
   // in ROS's convention (map-frame position, rotation about the map axes); without one (the
   // initialization frame, a relocalized one) a large diagonal, not the zeros an EKF would read
   // as certainty.
-  Eigen::Isometry3d T_map_child = result.T_w_c;
+  Eigen::Isometry3d T_map_child = T_map_c;
   std::string child = frame_id_;
   Eigen::Vector3d lever = Eigen::Vector3d::Zero();
   if (!params_.base_frame.empty()) {
@@ -119,9 +132,9 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
       publishPath(stamped);
       return;
     }
-    T_map_child = result.T_w_c * T_c_base;
+    T_map_child = T_map_c * T_c_base;
     child = params_.base_frame;
-    lever = result.T_w_c.linear() * T_c_base.translation();
+    lever = T_map_c.linear() * T_c_base.translation();
   }
   nav_msgs::OdometryPtr odom(new nav_msgs::Odometry);
   odom->header = stamped->header;
@@ -129,8 +142,8 @@ void TrackingNodelet::publishPose(const FrameResult& result, const std_msgs::Hea
   odom->pose.pose = toPoseMsg(T_map_child);
   Matrix6d cov = Matrix6d::Identity() * 1e3;
   Matrix6d step;
-  if (previous_pose_valid_ && vitamin_e::pipeline::stepCovariance(result, &step)) {
-    cov = covarianceMovedTo(covarianceInParent(step, result.T_w_c.linear()), lever);
+  if (previous_pose_valid_ && vitamin_e::pipeline::stepCovariance(frame_pose, &step)) {
+    cov = covarianceMovedTo(covarianceInParent(step, T_map_c.linear()), lever);
   }
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 6; ++c) odom->pose.covariance[6 * r + c] = cov(r, c);
