@@ -2,7 +2,7 @@
 // into an EuRoC ASL folder with exact ground truth: the textured room with boxes
 // (figure-eight camera path, lens distortion) or a street (a town driven along
 // a named path with KITTI's camera).
-//   vitamin_e_make_sequence --out DIR [--scene room|street] [--path turn|fast|drive]
+//   vitamin_e_make_sequence --out DIR [--scene room|street] [--path turn|fast|drive|long]
 //       [--frames N] [--rate-hz HZ] [--width W --height H] [--seed S] [--speed M_PER_S]
 //       [--noise SIGMA] [--distortion euroc|none] [--supersample S] [--texel M] [--boxes N]
 // Bad arguments: one "error: ..." line, exit 2.
@@ -18,7 +18,7 @@
 namespace {
 
 const char* const kUsage =
-    "usage: vitamin_e_make_sequence --out DIR [--scene room|street] [--path turn|fast|drive]\n"
+    "usage: vitamin_e_make_sequence --out DIR [--scene room|street] [--path turn|fast|drive|long]\n"
     "           [--frames N] [--rate-hz HZ] [--width W --height H] [--seed S] [--speed M_PER_S]\n"
     "           [--noise SIGMA] [--distortion euroc|none] [--supersample S] [--texel M] [--boxes N]\n"
     "  --out DIR          output folder (EuRoC ASL layout + groundtruth_cam0_tum.txt + scene.json)\n"
@@ -27,7 +27,8 @@ const char* const kUsage =
     "                     --path with KITTI's camera (1226 x 370, fx 707.09, no distortion, 10 Hz,\n"
     "                     1.65 m above the road); run it with --config config/kitti.yaml\n"
     "  --path P           street only: turn (slow straight, 90-degree left turn at walking speed, up to\n"
-    "                     3 deg/frame), fast (straight, 5 -> 15 m/s) or drive (default: both, KITTI 07-like)\n"
+    "                     3 deg/frame), fast (straight, 5 -> 15 m/s), drive (default: both, KITTI 07-like)\n"
+    "                     or long (fast, with 240 m at 15 m/s)\n"
     "  --frames N         number of images (room: default 400; street: default and at most the whole path)\n"
     "  --rate-hz HZ       frame rate (default 20; street 10)\n"
     "  --width/--height   image size (default 752 x 480, street 1226 x 370; intrinsics are scaled)\n"

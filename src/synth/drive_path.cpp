@@ -229,7 +229,7 @@ std::string DrivePath::toJson() const {
   return o.str();
 }
 
-std::vector<std::string> drivePathNames() { return {"turn", "fast", "drive"}; }
+std::vector<std::string> drivePathNames() { return {"turn", "fast", "drive", "long"}; }
 
 DrivePathConfig makeDrivePathConfig(const std::string& name) {
   DrivePathConfig c;
@@ -259,6 +259,9 @@ DrivePathConfig makeDrivePathConfig(const std::string& name) {
   } else if (name == "fast") {
     c.start_speed = 5.0;
     c.legs = {straight(60.0, 15.0), straight(45.0, 15.0)};
+  } else if (name == "long") {
+    c.start_speed = 5.0;
+    c.legs = {straight(60.0, 15.0), straight(240.0, 15.0)};
   } else if (name == "drive") {
     c.start_speed = 3.0;
     c.legs = {straight(15.0, 2.0), turn(90.0, 2.0),  straight(30.0, 8.5), straight(40.0, 8.5),

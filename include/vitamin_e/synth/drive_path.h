@@ -84,9 +84,11 @@ class DrivePath {
 //   "turn":  8 m straight slowing from 3 to 2 m/s, a 90-degree left turn at
 //            walking speed (2 m/s, up to 3 degrees per frame at 10 Hz), 10 m
 //            straight speeding up to 3.5 m/s.
-//   "fast":  a 150 m straight accelerating from 5 to 15 m/s, then 15 m/s.
+//   "fast":  a 60 m straight accelerating from 5 to 15 m/s, then 45 m at 15 m/s.
 //   "drive": KITTI 07-like: straight, left turn at walking speed, a fast
 //            straight at up to 8.5 m/s, braking, right turn, straight.
+//   "long":  "fast" with 240 m at 15 m/s after the 60 m of acceleration
+//            (300 m, 23 s): many side streets passed at speed.
 // Throws std::invalid_argument for another name (the message lists the names).
 DrivePathConfig makeDrivePathConfig(const std::string& name);
 std::vector<std::string> drivePathNames();
