@@ -33,6 +33,7 @@
 #include "vitamin_e/pipeline/dense_input.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
 #include "vitamin_e/pipeline/session.h"
+#include "vitamin_e/pipeline/session_runner.h"
 #include "vitamin_e/pipeline/system.h"
 #ifdef VITAMIN_E_WITH_ROS
 #include "vitamin_e/ros/bag_dataset.h"
@@ -376,10 +377,6 @@ int run(const Options& o) {
                  o.stride > 1 ? (", every " + std::to_string(o.stride) + "th").c_str() : "");
     std::fprintf(stderr, "[vitamin_e_run] camera (%s): %s\n", calib.format.c_str(), calib.camera.describe().c_str());
   }
-  // Sequential: a session, as the ROS tracker runs it (stamps jumping back, e.g. a bag of two
-  // recordings, start a new trajectory segment relocalized in the same map).
-  std::unique_ptr<pl::Session> sequential;
-  if (!o.pipelined) sequential = std::make_unique<pl::Session>(config, calib.camera);
   std::unique_ptr<vitamin_e::fusion::DenseMapper> dense;
   if (config.dense_enabled) {
     dense = std::make_unique<vitamin_e::fusion::DenseMapper>(config.dense,
@@ -413,11 +410,14 @@ int run(const Options& o) {
   Progress progress(frames_to_process, o.quiet);
   const auto t_start = vitamin_e::TimingClock::now();
   std::size_t attempted = 0;
+  // CPU time of each stage on its thread [ms, summed over the run]: stats.json cpu_ms.
+  double cpu_load = 0.0, cpu_mesh = 0.0;
   // Everything done with a frame's result: stats, progress, per-frame log, dense
   // mapping. Runs on the main thread (sequential) or the mapping thread
   // (--pipelined), never on both.
   std::mutex result_mutex;
   auto handle_result = [&](const pl::FrameResult& r) {
+    const double cpu0 = vitamin_e::threadCpuMs();
     std::lock_guard<std::mutex> lock(result_mutex);
     std::vector<std::pair<std::string, double>> stages(r.timing_ms.begin(), r.timing_ms.end());
     const double total_ms = r.timing_ms.count("total") ? r.timing_ms.at("total") : 0.0;
@@ -440,15 +440,19 @@ int run(const Options& o) {
     }
     stats.addFrame(r.pose_valid, r.num_tracked, r.num_mapped, stages, total_ms);
     progress.update(stats.frames, stats.tracked_frames);
+    // Sequential: the mesh is made here on the main thread (with the stats' bookkeeping).
+    if (!o.pipelined) cpu_mesh += vitamin_e::threadCpuMs() - cpu0;
   };
-  std::unique_ptr<pl::PipelinedSystem> pipelined;
-  if (o.pipelined) {
-    pipelined = std::make_unique<pl::PipelinedSystem>(config, calib.camera, pl::PipelinedOptions{},
-                                                      [&](const pl::FrameResult& r) { handle_result(r); });
-  }
+  // A session, as the ROS tracker runs it (stamps jumping back, e.g. a bag of two recordings,
+  // start a new trajectory segment relocalized in the same map), on this thread or pipelined.
+  pl::RunnerOptions runner_options;
+  runner_options.pipelined = o.pipelined;
+  runner_options.queue_frames = 2;  // a frame waiting for each stage: the reader never drops one
+  pl::SessionRunner runner(config, calib.camera, {}, runner_options,
+                           [&](pl::FrameResult&& r, std::uint64_t) { handle_result(r); });
   if (!o.load_map.empty()) {
     // Before the first frame: the system starts relocalizing in the loaded map.
-    pl::System& system = pipelined ? pipelined->system() : sequential->system();
+    pl::System& system = runner.system();
     const auto t0 = std::chrono::steady_clock::now();
     vitamin_e::map::MapFileContents contents;
     try {
@@ -466,14 +470,31 @@ int run(const Options& o) {
                    o.localization_only ? " (localization only)" : "");
     }
   }
-  // CPU time of each stage on its thread [ms, summed over the run]: stats.json cpu_ms.
-  double cpu_load = 0.0, cpu_tracking = 0.0, cpu_mapping = 0.0, cpu_mesh = 0.0;
   auto skip_unreadable = [&](const std::string& why, std::size_t i) {
     std::lock_guard<std::mutex> lock(result_mutex);
     progress.warn(why + " (frame " + std::to_string(i) + " skipped)");
     ++stats.skipped_frames;
   };
-  if (pipelined) {
+  unsigned dense_map = runner.session().map();
+  // A frame to the session: its stamp checked (a time jump starts a trajectory segment), then the
+  // SLAM. A frame out of order goes on to the system, which skips it and says so in its result.
+  auto process = [&](const cv::Mat& image, std::size_t i, double t, const std::string& text) {
+    const pl::SessionStamp stamp = runner.admit(t);  // a time jump finishes the frames before it
+    if (stamp.time_jump) {
+      if (runner.session().map() != dense_map) {  // a new map: its own world and scale
+        dense_map = runner.session().map();
+        dense_input.reset();
+        if (dense) dense->reset();
+      }
+      if (!o.quiet) {
+        std::lock_guard<std::mutex> lock(result_mutex);
+        progress.warn(runner.session().segmentNote() + ": trajectory segment " +
+                      std::to_string(runner.session().segment()));
+      }
+    }
+    runner.process(image, t, text, i);
+  };
+  if (o.pipelined) {
     // The images are decoded ahead on a thread of their own.
     io::FramePrefetcher ahead(*dataset, o.start_frame, end, o.stride, 3);
     while (!g_stop) {
@@ -489,19 +510,14 @@ int run(const Options& o) {
         std::lock_guard<std::mutex> lock(result_mutex);
         stats.timing.add("image_load", f->load_ms);
       }
-      pipelined->submit(f->image, f->timestamp, f->timestamp_text);
+      process(f->image, f->index, f->timestamp, f->timestamp_text);
     }
-    pipelined->flush();
-    const pl::PipelinedSystem::StageCpu cpu = pipelined->stageCpuMs();
-    cpu_tracking = cpu.tracking_ms;
-    cpu_mapping = cpu.mapping_ms;
   } else {
-    unsigned dense_map = sequential->map();
     for (std::size_t i = o.start_frame; i < end && !g_stop; i += o.stride) {
       ++attempted;
       cv::Mat image;
       const auto t_load = vitamin_e::TimingClock::now();
-      double cpu0 = vitamin_e::threadCpuMs();
+      const double cpu0 = vitamin_e::threadCpuMs();
       try {
         image = dataset->loadImage(i);
       } catch (const io::DatasetError& e) {
@@ -510,35 +526,13 @@ int run(const Options& o) {
       }
       stats.timing.add("image_load", vitamin_e::elapsedMs(t_load));
       cpu_load += vitamin_e::threadCpuMs() - cpu0;
-      // A frame out of order goes on to the system, which skips it and says so in its result.
-      const pl::SessionStamp stamp = sequential->admit(dataset->timestamp(i));
-      if (stamp.time_jump) {
-        if (sequential->map() != dense_map) {  // a new map: its own world and scale
-          dense_map = sequential->map();
-          dense_input.reset();
-          if (dense) dense->reset();
-        }
-        if (!o.quiet) {
-          std::lock_guard<std::mutex> lock(result_mutex);
-          progress.warn(sequential->segmentNote() + ": trajectory segment " + std::to_string(sequential->segment()));
-        }
-      }
-      // process() is mapFrame(trackFrame()): the two stages timed apart.
-      pl::System& system = sequential->system();
-      cpu0 = vitamin_e::threadCpuMs();
-      pl::TrackedFrame tracked = system.trackFrame(image, dataset->timestamp(i), dataset->timestampText(i));
-      const double cpu1 = vitamin_e::threadCpuMs();
-      cpu_tracking += cpu1 - cpu0;
-      const pl::FrameResult result = system.mapFrame(std::move(tracked));
-      const double cpu2 = vitamin_e::threadCpuMs();
-      cpu_mapping += cpu2 - cpu1;
-      handle_result(result);
-      cpu_mesh += vitamin_e::threadCpuMs() - cpu2;
+      process(image, i, dataset->timestamp(i), dataset->timestampText(i));
     }
   }
+  runner.flush();
   // The run ends when the dense reconstruction has caught up with the SLAM.
   if (dense) dense->flush();
-  const pl::System& system = pipelined ? pipelined->system() : sequential->system();
+  const pl::System& system = runner.system();
   progress.finish(attempted, stats.tracked_frames);
   stats.interrupted = g_stop != 0;
   stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
@@ -553,16 +547,16 @@ int run(const Options& o) {
     if (o.pipelined) stats.cpu_ms["mesh"] = cpu_mesh;
   }
   stats.cpu_ms["image_load"] = cpu_load;
-  stats.cpu_ms["tracking"] = cpu_tracking;
-  stats.cpu_ms["mapping"] = cpu_mapping;
-  // Sequential: the mesh is made on the main thread, in the result handler (with the stats' bookkeeping).
+  const pl::PipelinedSystem::StageCpu cpu = runner.stageCpuMs();
+  stats.cpu_ms["tracking"] = cpu.tracking_ms;
+  stats.cpu_ms["mapping"] = cpu.mapping_ms;
   if (!o.pipelined && dense) stats.cpu_ms["mesh"] = cpu_mesh;
   for (auto& [stage, ms] : stats.cpu_ms) ms /= static_cast<double>(std::max<std::size_t>(1, stats.frames));
-  stats.init_retries = sequential ? sequential->initRetries() : system.initRetries();
-  stats.relocalizations = sequential ? sequential->relocalizations() : system.relocalizations();
+  stats.init_retries = runner.session().initRetries();
+  stats.relocalizations = runner.session().relocalizations();
   // Frames seen while initializing are localized once the map exists: the
   // system's count (= trajectory poses) is the number of tracked frames.
-  stats.tracked_frames = sequential ? sequential->framesTracked() : system.framesTracked();
+  stats.tracked_frames = runner.session().framesTracked();
   stats.first_init_frame = system.firstInitFrame();
   stats.tracked_since_init = system.framesTrackedSinceInit();
   stats.reused_map_points = system.reusedMapPoints();
@@ -571,8 +565,7 @@ int run(const Options& o) {
   const std::vector<pl::MapPoint3> points = system.mapPoints();
   stats.map_points = points.size();
   // One segment: the plain TUM file; more (time jumps): each after its "# segment" line.
-  const std::vector<pl::TrajectorySegment> segments =
-      sequential ? sequential->segments() : std::vector<pl::TrajectorySegment>{};
+  const std::vector<pl::TrajectorySegment> segments = runner.session().segments();
   bool ok = segments.size() > 1 ? pl::saveSegmentsTum(segments, "T_w_c", traj_path, &err)
                                 : pl::saveTrajectoryTum(system.trajectory(), traj_path, &err);
   if (ok) ok = pl::saveMapPly(points, ply_path, &err);

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "vitamin_e/common/timing.h"
+
 namespace vitamin_e::pipeline {
 
 SessionRunner::SessionRunner(const SystemConfig& config, const camera::Camera& camera, const SessionConfig& session,
@@ -14,7 +16,25 @@ SessionRunner::SessionRunner(const SystemConfig& config, const camera::Camera& c
   if (options_.pipelined) startPipeline();
 }
 
-SessionRunner::~SessionRunner() { pipeline_.reset(); }
+SessionRunner::~SessionRunner() { stopPipeline(); }
+
+void SessionRunner::stopPipeline() {
+  if (!pipeline_) return;
+  const PipelinedSystem::StageCpu cpu = pipeline_->stageCpuMs();
+  pipeline_.reset();  // its frames finished first
+  stopped_cpu_.tracking_ms += cpu.tracking_ms;
+  stopped_cpu_.mapping_ms += cpu.mapping_ms;
+}
+
+PipelinedSystem::StageCpu SessionRunner::stageCpuMs() const {
+  PipelinedSystem::StageCpu cpu = stopped_cpu_;
+  if (pipeline_) {
+    const PipelinedSystem::StageCpu running = pipeline_->stageCpuMs();
+    cpu.tracking_ms += running.tracking_ms;
+    cpu.mapping_ms += running.mapping_ms;
+  }
+  return cpu;
+}
 
 void SessionRunner::startPipeline() {
   // Blocking queues: every frame given to process() comes out, in order, so that the
@@ -33,7 +53,7 @@ SessionStamp SessionRunner::admit(double timestamp) {
   if (!pipeline_ || !session_.stampGoesBack(timestamp)) return session_.admit(timestamp);
   // A time jump may restart the tracking or replace the System (Session::reset): the
   // pipeline is emptied and stopped first, and started again on the session's System.
-  pipeline_.reset();
+  stopPipeline();
   SessionStamp s = session_.admit(timestamp);
   startPipeline();
   return s;
@@ -44,7 +64,14 @@ bool SessionRunner::process(const cv::Mat& image, double timestamp, const std::s
   if (!pipeline_) {
     System::PoseListener on_pose;
     if (on_pose_) on_pose = [this, ticket](const FramePose& pose) { on_pose_(pose, ticket); };
-    FrameResult result = session_.system().process(image, timestamp, timestamp_text, on_pose);
+    // System::process, its two stages timed apart.
+    System& system = session_.system();
+    const double cpu0 = threadCpuMs();
+    TrackedFrame tracked = system.trackFrame(image, timestamp, timestamp_text);
+    const double cpu1 = threadCpuMs();
+    FrameResult result = system.mapFrame(std::move(tracked), on_pose);
+    stopped_cpu_.tracking_ms += cpu1 - cpu0;
+    stopped_cpu_.mapping_ms += threadCpuMs() - cpu1;
     if (on_result_) on_result_(std::move(result), ticket);
     return true;
   }
@@ -101,7 +128,7 @@ void SessionRunner::reset(const std::string& why) {
     session_.reset(why);
     return;
   }
-  pipeline_.reset();  // its System is replaced
+  stopPipeline();  // its System is replaced
   session_.reset(why);
   startPipeline();
 }

@@ -64,6 +64,10 @@ class SessionRunner {
   void reset(const std::string& why);
 
   bool pipelined() const { return options_.pipelined; }
+  // CPU time [ms] spent so far in the SLAM's two stages (System::trackFrame, mapFrame), on
+  // whichever thread ran them, over every pipeline this runner started (on_pose included,
+  // on_result not). Pipelined: exact after flush().
+  PipelinedSystem::StageCpu stageCpuMs() const;
   // Frames given to process() not handed to on_result yet.
   std::size_t inFlight() const;
   // flush() first: the pipeline's mapping thread writes the session's System.
@@ -75,6 +79,7 @@ class SessionRunner {
   void onPipelineResult(FrameResult&& result);
   void onPipelinePose(const FramePose& pose);
   void startPipeline();
+  void stopPipeline();  // finishes its frames; its stage CPU is kept
 
   Session session_;
   RunnerOptions options_;
@@ -83,6 +88,7 @@ class SessionRunner {
   // The tickets of the frames in the pipeline, in order (it keeps every frame and its order).
   mutable std::mutex tickets_mutex_;
   std::deque<std::uint64_t> tickets_;
+  PipelinedSystem::StageCpu stopped_cpu_;      // sequential frames, and the pipelines stopped
   std::unique_ptr<PipelinedSystem> pipeline_;  // last: its threads end before the rest goes
 };
 
