@@ -75,4 +75,28 @@ double RotationAgreement::meanAngleDeg() const {
   return std::acos(std::clamp(sum_dot_ / sum_norms_, -1.0, 1.0)) * 180.0 / M_PI;
 }
 
+std::optional<ImuRotationCheck::Verdict> ImuRotationCheck::add(bool pose_valid, double t, const Eigen::Matrix3d& R_w_c,
+                                                               const GyroInCamera& gyro) {
+  if (decided_) return std::nullopt;
+  if (!pose_valid) {
+    have_pose_ = false;
+    return std::nullopt;
+  }
+  std::optional<Verdict> verdict;
+  Eigen::Vector3d theta_gyro;
+  if (have_pose_ && gyro(t_, t, &theta_gyro)) {
+    const Eigen::AngleAxisd step(R_w_c_.transpose() * R_w_c);
+    agreement_.add(step.angle() * step.axis(), theta_gyro);
+    if (agreement_.cameraRotationDeg() >= kMinRotationDeg && agreement_.intervals() >= kMinIntervals) {
+      decided_ = true;
+      verdict = Verdict{agreement_.meanAngleDeg() <= kMaxMeanAngleDeg, agreement_.meanAngleDeg(),
+                        agreement_.cameraRotationDeg(), agreement_.intervals()};
+    }
+  }
+  have_pose_ = true;
+  t_ = t;
+  R_w_c_ = R_w_c;
+  return verdict;
+}
+
 }  // namespace vitamin_e_ros

@@ -1,15 +1,18 @@
-// The ROS layer's map frame, gravity window, covariance re-expression and
+// The ROS layer's map frame, gravity window, camera -> IMU rotation check, covariance re-expression and
 // diagnostics levels, without a ROS master.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <vector>
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
 #include "vitamin_e/TrackingStatus.h"
 #include "vitamin_e/geometry/lie.h"
+#include "vitamin_e/ros/imu_buffer.h"
 #include "vitamin_e/ros/map_frame.h"
 #include "vitamin_e/ros/tracking_health.h"
 
@@ -190,6 +193,63 @@ TEST(RosTrackingHealth, Levels) {
   EXPECT_NE(full.summary.find("queue is full"), std::string::npos) << full.summary;
   in.queued = 1;
   EXPECT_EQ(trackingHealth(in).level, DS::OK);
+}
+
+// The camera -> IMU rotation check: a camera turning 2 deg per frame about (0.2, 1, 0.1); the
+// gyroscope gives its increments through R_c_imu_wrong * R_c_imu_true^-1 (identity: the right
+// mounting). The verdict comes once, at the 10th interval (20 deg turned, over the 8 deg and 10
+// intervals asked), and only intervals between consecutive frames with a pose count.
+namespace {
+
+struct RotationRun {
+  std::vector<int> verdict_frames;
+  vitamin_e_ros::ImuRotationCheck::Verdict verdict;
+};
+
+RotationRun runRotationCheck(const Eigen::Matrix3d& R_mounting_error, const std::vector<int>& frames_without_pose,
+                             bool gyro_available = true) {
+  vitamin_e_ros::ImuRotationCheck check;
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.2, 1.0, 0.1).normalized();
+  const double step = 2.0 * M_PI / 180.0;
+  RotationRun run;
+  for (int k = 0; k < 30; ++k) {
+    const double t = 0.1 * k;
+    const Eigen::Matrix3d R_w_c = geo::expSO3(axis * step * k);
+    const bool pose = std::find(frames_without_pose.begin(), frames_without_pose.end(), k) == frames_without_pose.end();
+    const auto gyro = [&](double t0, double t1, Eigen::Vector3d* theta_c) {
+      *theta_c = R_mounting_error * axis * step * std::round((t1 - t0) / 0.1);
+      return gyro_available;
+    };
+    if (const auto v = check.add(pose, t, R_w_c, gyro)) {
+      run.verdict_frames.push_back(k);
+      run.verdict = *v;
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+TEST(RosImuRotationCheck, TheRightMountingAgreesOnceAtTheTenthInterval) {
+  const RotationRun run = runRotationCheck(Eigen::Matrix3d::Identity(), {});
+  ASSERT_EQ(run.verdict_frames, std::vector<int>{10});
+  EXPECT_TRUE(run.verdict.agrees);
+  EXPECT_NEAR(run.verdict.mean_angle_deg, 0.0, 1e-3);
+  EXPECT_NEAR(run.verdict.rotation_deg, 20.0, 1e-6);
+  EXPECT_EQ(run.verdict.intervals, 10);
+}
+
+TEST(RosImuRotationCheck, AMountingTurnedByHalfARightAngleIsWrong) {
+  const RotationRun run = runRotationCheck(geo::expSO3(Eigen::Vector3d(M_PI / 4, 0.0, 0.0)), {});
+  ASSERT_EQ(run.verdict_frames, std::vector<int>{10});
+  EXPECT_FALSE(run.verdict.agrees);
+  EXPECT_GT(run.verdict.mean_angle_deg, 30.0);
+}
+
+TEST(RosImuRotationCheck, NoIntervalAcrossAFrameWithoutAPoseNorWithoutTheGyroscope) {
+  // Frames 3 and 4 without a pose: intervals 2-3, 3-4 and 4-5 are lost, the 10th interval ends at 13.
+  EXPECT_EQ(runRotationCheck(Eigen::Matrix3d::Identity(), {3, 4}).verdict_frames, std::vector<int>{13});
+  EXPECT_TRUE(runRotationCheck(Eigen::Matrix3d::Identity(), {}, false).verdict_frames.empty());
 }
 
 int main(int argc, char** argv) {

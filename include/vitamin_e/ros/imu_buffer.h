@@ -2,11 +2,12 @@
 // The IMU messages the tracking nodelet keeps: the IMU callback adds, the SLAM thread
 // reads (thread-safe). The accelerometer gives the map's gravity (GravityWindow); the
 // gyroscope checks the camera -> IMU rotation against the camera's own rotation
-// (RotationAgreement). Plain Eigen: unit-tested without a master.
+// (RotationAgreement, ImuRotationCheck). Plain Eigen: unit-tested without a master.
 #include <cstddef>
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -61,6 +62,40 @@ class RotationAgreement {
  private:
   int intervals_ = 0;
   double sum_c_ = 0.0, sum_dot_ = 0.0, sum_norms_ = 0.0;
+};
+
+// The camera -> IMU rotation checked once over the tracked poses: every interval between two
+// consecutive frames with a pose adds the camera's rotation and the gyroscope's to a
+// RotationAgreement, until the camera has turned enough to tell a wrong mounting (tens of
+// degrees off) from gyroscope noise and bias; then the verdict, once.
+class ImuRotationCheck {
+ public:
+  static constexpr double kMinRotationDeg = 8.0;
+  static constexpr int kMinIntervals = 10;
+  static constexpr double kMaxMeanAngleDeg = 30.0;  // a mean angle above: the rotation is wrong
+
+  struct Verdict {
+    bool agrees = false;          // mean_angle_deg <= kMaxMeanAngleDeg
+    double mean_angle_deg = 0.0;  // RotationAgreement::meanAngleDeg
+    double rotation_deg = 0.0;    // the camera's rotation it was judged over
+    int intervals = 0;
+  };
+  // The gyroscope's rotation vector over (t0, t1], in the camera frame; false when it is not
+  // available (samples missing, no camera -> IMU rotation).
+  using GyroInCamera = std::function<bool(double t0, double t1, Eigen::Vector3d* theta_c)>;
+
+  // A frame: its camera orientation when it has a pose (pose_valid false: the next pose starts a
+  // new interval). Returns the verdict at the frame that decides it, and nothing before or after.
+  std::optional<Verdict> add(bool pose_valid, double t, const Eigen::Matrix3d& R_w_c, const GyroInCamera& gyro);
+  void restart() { have_pose_ = false; }  // a new map or path: no interval across it
+  bool decided() const { return decided_; }
+
+ private:
+  bool have_pose_ = false;
+  double t_ = 0.0;
+  Eigen::Matrix3d R_w_c_ = Eigen::Matrix3d::Identity();
+  RotationAgreement agreement_;
+  bool decided_ = false;
 };
 
 }  // namespace vitamin_e_ros

@@ -90,45 +90,29 @@ bool TrackingNodelet::imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* source,
 }
 
 void TrackingNodelet::checkImuRotation(const vitamin_e::pipeline::FrameResult& result) {
-  // Enough rotation to tell a wrong mounting (tens of degrees off) from gyroscope noise and bias.
-  constexpr double kMinRotationDeg = 8.0;
-  constexpr int kMinIntervals = 10;
-  constexpr double kMaxMeanAngleDeg = 30.0;
-  if (!result.pose_valid) {
-    have_rotation_pose_ = false;
-    return;
-  }
-  const Eigen::Matrix3d R = result.T_w_c.linear();
-  if (have_rotation_pose_) {
+  std::string source;  // where the camera -> IMU rotation came from
+  const auto gyro_in_camera = [&](double t0, double t1, Eigen::Vector3d* theta_c) {
     Eigen::Vector3d theta_imu;
     Eigen::Matrix3d R_c_imu;
-    std::string source, why;
-    if (imu_.rotationBetween(rotation_pose_t_, result.timestamp, &theta_imu) && imuToCamera(&R_c_imu, &source, &why)) {
-      const Eigen::AngleAxisd step(rotation_pose_R_.transpose() * R);
-      rotation_agreement_.add(step.angle() * step.axis(), R_c_imu * theta_imu);
-      if (rotation_agreement_.cameraRotationDeg() >= kMinRotationDeg &&
-          rotation_agreement_.intervals() >= kMinIntervals) {
-        rotation_checked_ = true;
-        const double angle = rotation_agreement_.meanAngleDeg();
-        if (angle > kMaxMeanAngleDeg) {
-          NODELET_WARN("the camera -> IMU rotation from %s looks wrong for this camera: the camera's turns and the "
-                       "gyroscope's of %s, rotated into the camera, differ by %.0f deg on average (over %.1f deg of "
-                       "rotation, %d frames); the map's z (gravity) is then wrong too. Calibrate T_BS for this "
-                       "camera and IMU (a EuRoC calibration on another sensor's bag does not fit)",
-                       source.c_str(), params_.imu_topic.c_str(), angle, rotation_agreement_.cameraRotationDeg(),
-                       rotation_agreement_.intervals());
-        } else {
-          NODELET_INFO("the camera -> IMU rotation from %s agrees with the gyroscope of %s: %.1f deg apart on average "
-                       "(over %.1f deg of rotation, %d frames)",
-                       source.c_str(), params_.imu_topic.c_str(), angle, rotation_agreement_.cameraRotationDeg(),
-                       rotation_agreement_.intervals());
-        }
-      }
-    }
+    std::string why;
+    if (!imu_.rotationBetween(t0, t1, &theta_imu) || !imuToCamera(&R_c_imu, &source, &why)) return false;
+    *theta_c = R_c_imu * theta_imu;
+    return true;
+  };
+  const std::optional<ImuRotationCheck::Verdict> v =
+      rotation_check_.add(result.pose_valid, result.timestamp, result.T_w_c.linear(), gyro_in_camera);
+  if (!v) return;
+  if (!v->agrees) {
+    NODELET_WARN("the camera -> IMU rotation from %s looks wrong for this camera: the camera's turns and the "
+                 "gyroscope's of %s, rotated into the camera, differ by %.0f deg on average (over %.1f deg of "
+                 "rotation, %d frames); the map's z (gravity) is then wrong too. Calibrate T_BS for this "
+                 "camera and IMU (a EuRoC calibration on another sensor's bag does not fit)",
+                 source.c_str(), params_.imu_topic.c_str(), v->mean_angle_deg, v->rotation_deg, v->intervals);
+  } else {
+    NODELET_INFO("the camera -> IMU rotation from %s agrees with the gyroscope of %s: %.1f deg apart on average "
+                 "(over %.1f deg of rotation, %d frames)",
+                 source.c_str(), params_.imu_topic.c_str(), v->mean_angle_deg, v->rotation_deg, v->intervals);
   }
-  have_rotation_pose_ = true;
-  rotation_pose_t_ = result.timestamp;
-  rotation_pose_R_ = R;
 }
 
 bool TrackingNodelet::cameraToBase(Eigen::Isometry3d* T_c_base, std::string* why, double timeout_s) {

@@ -564,7 +564,7 @@ void TrackingNodelet::onResult(FrameResult&& result, std::uint64_t ticket) {
   // IMU samples older than any later frame's gravity window (until the map is fixed), or than
   // the rotation check's last interval, are not needed.
   imu_.dropBefore(header.stamp.toSec() - (have_map_ ? 2.0 : params_.gravity_window_s + 1.0));
-  if (!params_.imu_topic.empty() && !rotation_checked_) checkImuRotation(result);
+  if (!params_.imu_topic.empty() && !rotation_check_.decided()) checkImuRotation(result);
   snapshot_.update(session(), T_map_w_);
   // Everything published is in the map frame: T_map_c = T_map_w T_w_c, p_map = T_map_w p_w.
   if (have_map_) {
@@ -601,7 +601,7 @@ void TrackingNodelet::resetMap(const std::string& why) {
   have_map_ = false;
   T_map_w_ = Eigen::Isometry3d::Identity();
   map_description_.clear();
-  have_rotation_pose_ = false;
+  rotation_check_.restart();
   startPath();
   snapshot_.update(session(), T_map_w_);
 }
@@ -610,7 +610,7 @@ void TrackingNodelet::startPath() {
   last_map_points_ = ros::Time();
   track_history_.clear();
   previous_pose_valid_ = false;
-  have_rotation_pose_ = false;
+  rotation_check_.restart();
   path_.poses.clear();
   path_pub_.publish(path_);
   std::lock_guard<std::mutex> lock(stats_mutex_);

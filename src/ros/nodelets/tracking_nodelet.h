@@ -239,12 +239,7 @@ class TrackingNodelet : public nodelet::Nodelet {
   bool have_T_c_base_ = false;
   Eigen::Isometry3d T_c_base_ = Eigen::Isometry3d::Identity();
   bool body_tf_sent_ = false;
-  // The camera -> IMU rotation check: the last pose it saw, what it gathered, done once said.
-  bool have_rotation_pose_ = false;
-  double rotation_pose_t_ = 0.0;
-  Eigen::Matrix3d rotation_pose_R_ = Eigen::Matrix3d::Identity();
-  RotationAgreement rotation_agreement_;
-  bool rotation_checked_ = false;
+  ImuRotationCheck rotation_check_;  // the camera -> IMU rotation against the camera's turns
 
   TrajectorySnapshot snapshot_;  // ~save_trajectory's copy (own mutex)
   ImuBuffer imu_;                // ~imu_topic's samples (own mutex)
