@@ -12,11 +12,11 @@ namespace vitamin_e_ros {
 
 void TrackingNodelet::alignMap(const vitamin_e::pipeline::FrameResult& result) {
   const Eigen::Isometry3d T_w_c0 = Eigen::Isometry3d::Identity();
-  have_map_ = true;
+  map_alignment_.fixed = true;
   const unsigned map = session().map();
   if (params_.opticalMap()) {
-    T_map_w_ = Eigen::Isometry3d::Identity();
-    map_description_ = "map = the first camera's optical frame";
+    map_alignment_.T_map_w = Eigen::Isometry3d::Identity();
+    map_alignment_.description = "map = the first camera's optical frame";
     return;
   }
   std::string why_not;
@@ -28,13 +28,13 @@ void TrackingNodelet::alignMap(const vitamin_e::pipeline::FrameResult& result) {
       const GravityWindow::Estimate e = imu_.upInWorld(
           result.timestamp, params_.gravity_window_s, [&](double t) { return orientationAt(trajectory, t); }, R_c_imu);
       if (e.ok) {
-        T_map_w_ = mapFromUp(e.up_w, T_w_c0);
+        map_alignment_.T_map_w = mapFromUp(e.up_w, T_w_c0);
         char text[256];
         std::snprintf(text, sizeof(text),
                       "map z up from gravity (%s: %d samples over %.2f s before the initialization, |f| %.2f m/s^2), "
                       "x the first camera's heading",
                       params_.imu_topic.c_str(), e.samples, e.span_s, e.magnitude);
-        map_description_ = text;
+        map_alignment_.description = text;
         NODELET_INFO("map %u: %s", map, text);
         if (e.magnitude < 7.0 || e.magnitude > 12.5) {
           NODELET_WARN("the mean specific force is %.2f m/s^2, not gravity (9.81): check the IMU's units", e.magnitude);
@@ -50,16 +50,16 @@ void TrackingNodelet::alignMap(const vitamin_e::pipeline::FrameResult& result) {
   if (!params_.base_frame.empty() && params_.base_frame != params_.body_frame) {
     Eigen::Isometry3d T_c_base;
     if (cameraToBase(&T_c_base, &why_not, 0.2)) {
-      T_map_w_ = mapFromBase(T_c_base.inverse(), T_w_c0);
-      map_description_ = "map = " + params_.base_frame + " when the first image was taken";
-      NODELET_INFO("map %u: %s", map, map_description_.c_str());
+      map_alignment_.T_map_w = mapFromBase(T_c_base.inverse(), T_w_c0);
+      map_alignment_.description = "map = " + params_.base_frame + " when the first image was taken";
+      NODELET_INFO("map %u: %s", map, map_alignment_.description.c_str());
       return;
     }
     NODELET_WARN("map %u: the map cannot follow %s (%s)", map, params_.base_frame.c_str(), why_not.c_str());
   }
-  T_map_w_ = mapFromCameraAxes(T_w_c0);
-  map_description_ = "map = the first camera in ROS axes (x forward, z up): only as level as that camera";
-  NODELET_INFO("map %u: %s", map, map_description_.c_str());
+  map_alignment_.T_map_w = mapFromCameraAxes(T_w_c0);
+  map_alignment_.description = "map = the first camera in ROS axes (x forward, z up): only as level as that camera";
+  NODELET_INFO("map %u: %s", map, map_alignment_.description.c_str());
 }
 
 bool TrackingNodelet::imuToCamera(Eigen::Matrix3d* R_c_imu, std::string* source, std::string* why) {

@@ -275,7 +275,7 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
                  localization_only ? " (localization only)" : "");
   }
   runner_->system().setLocalizationOnly(localization_only);
-  snapshot_.update(session(), T_map_w_);
+  snapshot_.update(session(), map_alignment_.T_map_w);
   camera_width_ = camera.width();
   camera_height_ = camera.height();
 }
@@ -514,10 +514,8 @@ void TrackingNodelet::processFrame(const QueuedFrame& frame) {
                  session().segmentNote().c_str(), session().segment(), session().map());
     if (session().map() != map_before) {
       // Nothing to relocalize in: the session started a new map, with a map frame of its own.
-      snapshot_.update(session(), T_map_w_);
-      have_map_ = false;
-      T_map_w_ = Eigen::Isometry3d::Identity();
-      map_description_.clear();
+      snapshot_.update(session(), map_alignment_.T_map_w);
+      map_alignment_ = MapAlignment{};
     }
     startPath();
   }
@@ -560,17 +558,17 @@ void TrackingNodelet::onResult(FrameResult&& result, std::uint64_t ticket) {
   frame_id_ = frame.frame_id;
   if (!body_tf_sent_) publishBodyTransform();
   const double ms = vitamin_e::elapsedMs(frame.start);
-  if (result.pose_valid && !have_map_) alignMap(result);
+  if (result.pose_valid && !map_alignment_.fixed) alignMap(result);
   // IMU samples older than any later frame's gravity window (until the map is fixed), or than
   // the rotation check's last interval, are not needed.
-  imu_.dropBefore(header.stamp.toSec() - (have_map_ ? 2.0 : params_.gravity_window_s + 1.0));
+  imu_.dropBefore(header.stamp.toSec() - (map_alignment_.fixed ? 2.0 : params_.gravity_window_s + 1.0));
   if (!params_.imu_topic.empty() && !rotation_check_.decided()) checkImuRotation(result);
-  snapshot_.update(session(), T_map_w_);
+  snapshot_.update(session(), map_alignment_.T_map_w);
   // Everything published is in the map frame: T_map_c = T_map_w T_w_c, p_map = T_map_w p_w.
-  if (have_map_) {
-    result.T_w_c = T_map_w_ * result.T_w_c;
+  if (map_alignment_.fixed) {
+    result.T_w_c = map_alignment_.T_map_w * result.T_w_c;
     for (auto& p : result.points) {
-      if (p.has_position) p.p_w = T_map_w_ * p.p_w;
+      if (p.has_position) p.p_w = map_alignment_.T_map_w * p.p_w;
     }
   }
   publishResult(result, frame.frame, ms, frame.pose_published);
@@ -578,7 +576,7 @@ void TrackingNodelet::onResult(FrameResult&& result, std::uint64_t ticket) {
 }
 
 void TrackingNodelet::onPose(const vitamin_e::pipeline::FramePose& pose, std::uint64_t ticket) {
-  if (!have_map_) return;  // the map frame is fixed at the first result: the pose goes out with it
+  if (!map_alignment_.fixed) return;  // the map frame is fixed at the first result: the pose goes out with it
   std_msgs::Header header;
   {
     std::lock_guard<std::mutex> lock(pending_mutex_);
@@ -591,19 +589,17 @@ void TrackingNodelet::onPose(const vitamin_e::pipeline::FramePose& pose, std::ui
   }
   if (!body_tf_sent_) publishBodyTransform();
   vitamin_e::pipeline::FramePose in_map = pose;
-  in_map.T_w_c = T_map_w_ * pose.T_w_c;
+  in_map.T_w_c = map_alignment_.T_map_w * pose.T_w_c;
   publishFramePose(in_map, header);
 }
 
 void TrackingNodelet::resetMap(const std::string& why) {
   runner_->reset(why);
-  snapshot_.update(session(), T_map_w_);  // the finished segment, in the old map frame
-  have_map_ = false;
-  T_map_w_ = Eigen::Isometry3d::Identity();
-  map_description_.clear();
+  snapshot_.update(session(), map_alignment_.T_map_w);  // the finished segment, in the old map frame
+  map_alignment_ = MapAlignment{};
   rotation_check_.restart();
   startPath();
-  snapshot_.update(session(), T_map_w_);
+  snapshot_.update(session(), map_alignment_.T_map_w);
 }
 
 void TrackingNodelet::startPath() {
@@ -677,7 +673,7 @@ bool TrackingNodelet::saveTrajectory(const std::string& path, std::string* messa
 
 std::vector<vitamin_e::pipeline::MapPoint3> TrackingNodelet::mapPointsInMap() const {
   auto points = session().system().mapPoints();
-  for (auto& p : points) p.p_w = T_map_w_ * p.p_w;
+  for (auto& p : points) p.p_w = map_alignment_.T_map_w * p.p_w;
   return points;
 }
 

@@ -232,10 +232,13 @@ class TrackingNodelet : public nodelet::Nodelet {
   vitamin_e::pipeline::DenseInput dense_input_;
   unsigned dense_input_map_ = 1;
   bool previous_pose_valid_ = false;  // the frame before had a pose (the odometry's step exists)
-  // The map frame of the session's current map: T_map_w once its first pose exists.
-  bool have_map_ = false;
-  Eigen::Isometry3d T_map_w_ = Eigen::Isometry3d::Identity();
-  std::string map_description_;
+  // The map frame of the session's current map: T_map_w once its first pose fixed it (alignMap).
+  struct MapAlignment {
+    bool fixed = false;
+    Eigen::Isometry3d T_map_w = Eigen::Isometry3d::Identity();
+    std::string description;  // how it was fixed, for the log
+  };
+  MapAlignment map_alignment_;
   bool have_T_c_base_ = false;
   Eigen::Isometry3d T_c_base_ = Eigen::Isometry3d::Identity();
   bool body_tf_sent_ = false;

@@ -245,7 +245,7 @@ void TrackingNodelet::publishMapPoints(const ros::Time& stamp) {
   intensity.reserve(map.size());
   for (const auto& p : map) {
     if (!isFinite(p.p_w)) continue;
-    points.push_back((T_map_w_ * p.p_w).cast<float>());
+    points.push_back((map_alignment_.T_map_w * p.p_w).cast<float>());
     intensity.push_back(p.intensity);
   }
   if (points.size() < map.size()) {
