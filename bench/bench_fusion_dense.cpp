@@ -2,7 +2,8 @@
 // render of /work/shared/tools/render_sequence.py with exact ground truth.
 //   bench_fusion_dense RENDER_DIR [--config YAML] [--gt-input] [--step N] [--max-frames N]
 //       [--voxel-lo M] [--voxel-hi M] [--trunc-voxels N] [--max-depth-2p5 M] [--weight-ref M] [--out DIR]
-//       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--beta B] [--lambda L]
+//       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--warm-iters N] [--nltgv-tol T] [--nltgv-check K]
+//       [--beta B] [--lambda L]
 //       GT input only: [--points N] [--noise REL] [--outliers RATE]
 // Default (SLAM input): runs pipeline::System (sequential, as vitamin_e_run) on
 // every frame of the render with --config; every --step-th tracked frame's
@@ -24,6 +25,8 @@
 // points seen within that range from the ground-truth poses of the used frames.
 // --max-frames N limits the input to N meshed frames (SLAM: the first N * step images).
 // Prints per-stage timings and, as the last line, a JSON summary.
+// The denoiser's instructions alone: run under valgrind --tool=callgrind --instr-atstart=no
+// (only the NLTGV calls are instrumented; the rest runs at valgrind's uninstrumented speed).
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -31,6 +34,13 @@
 #include <random>
 #include <sstream>
 #include <unordered_map>
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#endif
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -66,8 +76,8 @@ struct Args {
   double trunc_voxels = 5.0;                    // truncation band half-width in voxels
   // NLTGV changes on top of the config's dense section (negative: not given).
   bool no_warm = false, warm_duals_only = false;
-  int warm_iters = -1, nltgv_iters = -1;
-  double beta = -1.0, lambda = -1.0;
+  int warm_iters = -1, nltgv_iters = -1, nltgv_check = -1;
+  double beta = -1.0, lambda = -1.0, nltgv_tol = -1.0;
 };
 
 const char* const kUsage =
@@ -79,6 +89,7 @@ const char* const kUsage =
     "  --trunc-voxels N    truncation in voxels (5)    --max-depth-2p5 M  depth limit of the fine TSDF [m] (6)\n"
     "  --weight-ref M      depth weighting reference [m] (3)    --out DIR  write the meshes\n"
     "  --no-nltgv, --no-warm, --warm-duals-only, --warm-iters N, --nltgv-iters N, --beta B, --lambda L\n"
+    "  --nltgv-tol T, --nltgv-check K   NLTGV early stop: tolerance (0: off), iterations between checks\n"
     "                      NLTGV changes on top of the config\n"
     "  GT input only: --points N (5000), --noise REL (0.01), --outliers RATE (0.02)\n";
 
@@ -95,7 +106,8 @@ Args parse(int argc, char** argv) {
         args.value("--weight-ref", &a.weight_ref) || args.value("--trunc-voxels", &a.trunc_voxels) ||
         args.flag("--no-warm", &a.no_warm) || args.flag("--warm-duals-only", &a.warm_duals_only) ||
         args.value("--warm-iters", &a.warm_iters) || args.value("--nltgv-iters", &a.nltgv_iters) ||
-        args.value("--beta", &a.beta) || args.value("--lambda", &a.lambda)) {
+        args.value("--beta", &a.beta) || args.value("--lambda", &a.lambda) || args.value("--nltgv-tol", &a.nltgv_tol) ||
+        args.value("--nltgv-check", &a.nltgv_check)) {
       continue;
     }
     args.unknown();
@@ -120,6 +132,9 @@ void applyNltgvOptions(const Args& a, meshing::NltgvConfig* c) {
   if (a.nltgv_iters >= 0) c->iterations = a.nltgv_iters;
   if (a.beta >= 0) c->beta = a.beta;
   if (a.lambda >= 0) c->lambda = a.lambda;
+  if (a.nltgv_tol >= 0) c->tolerance = a.nltgv_tol;
+  if (a.nltgv_check >= 0) c->check_every = a.nltgv_check;
+  c->validate();
 }
 
 // One frame's input to the dense reconstruction (what the SLAM pipeline provides).
@@ -374,6 +389,7 @@ int main(int argc, char** argv) try {
 
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<double> nltgv_iters;  // iterations run per denoised frame
   std::vector<double> raw_err, smooth_err, raw_dense, smooth_dense, mesh_ms, t15_ms, t25_ms, mesh_cpu, t15_cpu, t25_cpu,
       verts;
   std::vector<Vector3d> seen;  // points on true surfaces the camera saw (completeness)
@@ -389,7 +405,10 @@ int main(int argc, char** argv) try {
     const meshing::FrameMesh raw = mesh;
     if (denoise && !mesh.triangles.empty()) {
       ScopedTimer t(&timings, "nltgv");
-      nltgv.denoise(&mesh, K);
+      CALLGRIND_START_INSTRUMENTATION;
+      const meshing::NltgvStats st = nltgv.denoise(&mesh, K);
+      CALLGRIND_STOP_INSTRUMENTATION;
+      nltgv_iters.push_back(st.iterations);
     }
     {
       ScopedTimer t(&timings, "prune");
@@ -490,9 +509,12 @@ int main(int argc, char** argv) try {
     std::printf("Sim(3) to ground truth: scale %.4f m per map unit, ATE rmse %.4f m; voxels %.4f / %.4f map units\n", s,
                 ate_rmse, c15.voxel_size, c25.voxel_size);
   }
-  std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm)\n",
+  double nltgv_iters_mean = 0.0;
+  for (double v : nltgv_iters) nltgv_iters_mean += v / static_cast<double>(nltgv_iters.size());
+  std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm, tolerance %g "
+              "every %d; ran %.1f per frame on average)\n",
               frames.size(), args.step, median(verts), denoise ? "on" : "off", nltgv_cfg.iterations,
-              nltgv_cfg.warm_iterations);
+              nltgv_cfg.warm_iterations, nltgv_cfg.tolerance, nltgv_cfg.check_every, nltgv_iters_mean);
   std::printf("%s", timings.table().c_str());
   std::printf("wall ms/frame (min / median), thread CPU ms/frame (min / median):\n");
   std::printf("  mesh (delaunay+nltgv+prune): %7.2f / %7.2f   cpu %7.2f / %7.2f\n", min_of(mesh_ms), median(mesh_ms),
@@ -521,11 +543,11 @@ int main(int argc, char** argv) try {
       "\"raw_dense_depth_err_median\":%.5f,\"nltgv_dense_depth_err_median\":%.5f,\"mesh_cpu_ms_per_frame\":%.2f,"
       "\"tsdf_cpu_ms_15cm\":%.2f,\"tsdf_cpu_ms_2p5cm\":%.2f,\"accuracy_median_15cm_m\":%.4f,"
       "\"completeness_5cm_15cm\":%.4f,\"input\":\"%s\",\"sim3_scale\":%.5f,\"ate_rmse_m\":%.5f,\"frames\":%zu,"
-      "\"accuracy_median_runner_m\":%.4f,\"completeness_5cm_runner\":%.4f}\n",
+      "\"accuracy_median_runner_m\":%.4f,\"completeness_5cm_runner\":%.4f,\"nltgv_iterations_mean\":%.2f}\n",
       median(acc25), percentile(acc25, 90), comp25, median(raw_err), median(smooth_err), median(mesh_ms),
       median(t15_ms), median(t25_ms), median(raw_dense), median(smooth_dense), median(mesh_cpu), median(t15_cpu),
       median(t25_cpu), median(acc15), comp15, args.gt_input ? "gt" : "slam", s, ate_rmse, frames.size(),
-      accrun.empty() ? 0.0 : median(accrun), comprun);
+      accrun.empty() ? 0.0 : median(accrun), comprun, nltgv_iters_mean);
   return 0;
 } catch (const std::exception& e) {
   vitamin_e::cli::fail(e.what());
