@@ -2,8 +2,7 @@
 // render of /work/shared/tools/render_sequence.py with exact ground truth.
 //   bench_fusion_dense RENDER_DIR [--config YAML] [--gt-input] [--step N] [--max-frames N]
 //       [--voxel-lo M] [--voxel-hi M] [--trunc-voxels N] [--max-depth-2p5 M] [--weight-ref M] [--out DIR]
-//       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--warm-iters N] [--nltgv-tol T] [--nltgv-check K]
-//       [--beta B] [--lambda L]
+//       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--warm-iters N] [--beta B] [--lambda L]
 //       GT input only: [--points N] [--noise REL] [--outliers RATE]
 // Default (SLAM input): runs pipeline::System (sequential, as vitamin_e_run) on
 // every frame of the render with --config; every --step-th tracked frame's
@@ -76,8 +75,8 @@ struct Args {
   double trunc_voxels = 5.0;                    // truncation band half-width in voxels
   // NLTGV changes on top of the config's dense section (negative: not given).
   bool no_warm = false, warm_duals_only = false;
-  int warm_iters = -1, nltgv_iters = -1, nltgv_check = -1;
-  double beta = -1.0, lambda = -1.0, nltgv_tol = -1.0;
+  int warm_iters = -1, nltgv_iters = -1;
+  double beta = -1.0, lambda = -1.0;
 };
 
 const char* const kUsage =
@@ -89,7 +88,6 @@ const char* const kUsage =
     "  --trunc-voxels N    truncation in voxels (5)    --max-depth-2p5 M  depth limit of the fine TSDF [m] (6)\n"
     "  --weight-ref M      depth weighting reference [m] (3)    --out DIR  write the meshes\n"
     "  --no-nltgv, --no-warm, --warm-duals-only, --warm-iters N, --nltgv-iters N, --beta B, --lambda L\n"
-    "  --nltgv-tol T, --nltgv-check K   NLTGV early stop: tolerance (0: off), iterations between checks\n"
     "                      NLTGV changes on top of the config\n"
     "  GT input only: --points N (5000), --noise REL (0.01), --outliers RATE (0.02)\n";
 
@@ -106,8 +104,7 @@ Args parse(int argc, char** argv) {
         args.value("--weight-ref", &a.weight_ref) || args.value("--trunc-voxels", &a.trunc_voxels) ||
         args.flag("--no-warm", &a.no_warm) || args.flag("--warm-duals-only", &a.warm_duals_only) ||
         args.value("--warm-iters", &a.warm_iters) || args.value("--nltgv-iters", &a.nltgv_iters) ||
-        args.value("--beta", &a.beta) || args.value("--lambda", &a.lambda) || args.value("--nltgv-tol", &a.nltgv_tol) ||
-        args.value("--nltgv-check", &a.nltgv_check)) {
+        args.value("--beta", &a.beta) || args.value("--lambda", &a.lambda)) {
       continue;
     }
     args.unknown();
@@ -132,8 +129,6 @@ void applyNltgvOptions(const Args& a, meshing::NltgvConfig* c) {
   if (a.nltgv_iters >= 0) c->iterations = a.nltgv_iters;
   if (a.beta >= 0) c->beta = a.beta;
   if (a.lambda >= 0) c->lambda = a.lambda;
-  if (a.nltgv_tol >= 0) c->tolerance = a.nltgv_tol;
-  if (a.nltgv_check >= 0) c->check_every = a.nltgv_check;
   c->validate();
 }
 
@@ -511,10 +506,10 @@ int main(int argc, char** argv) try {
   }
   double nltgv_iters_mean = 0.0;
   for (double v : nltgv_iters) nltgv_iters_mean += v / static_cast<double>(nltgv_iters.size());
-  std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm, tolerance %g "
-              "every %d; ran %.1f per frame on average)\n",
+  std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm; ran %.1f per "
+              "frame on average)\n",
               frames.size(), args.step, median(verts), denoise ? "on" : "off", nltgv_cfg.iterations,
-              nltgv_cfg.warm_iterations, nltgv_cfg.tolerance, nltgv_cfg.check_every, nltgv_iters_mean);
+              nltgv_cfg.warm_iterations, nltgv_iters_mean);
   std::printf("%s", timings.table().c_str());
   std::printf("wall ms/frame (min / median), thread CPU ms/frame (min / median):\n");
   std::printf("  mesh (delaunay+nltgv+prune): %7.2f / %7.2f   cpu %7.2f / %7.2f\n", min_of(mesh_ms), median(mesh_ms),

@@ -26,8 +26,6 @@ void NltgvConfig::validate() const {
   require(lambda > 0.0, "lambda", "must be > 0");
   require(iterations >= 0, "iterations", "must be >= 0");
   require(warm_iterations >= 0, "warm_iterations", "must be >= 0");
-  require(tolerance >= 0.0 && std::isfinite(tolerance), "tolerance", "must be >= 0 and finite");
-  require(check_every >= 1, "check_every", "must be >= 1");
   require(theta >= 0.0 && theta <= 1.0, "theta", "must be in [0, 1]");
   require(support_sigma >= 0.0, "support_sigma", "must be >= 0");
   require(min_support > 0.0 && min_support <= 1.0, "min_support", "must be in (0, 1]");
@@ -169,15 +167,11 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
   }
   const double s12 = 1.0 / (2.0 * b);
   const bool warm = stats.warm_started * 2 > static_cast<std::size_t>(n);
-  const int max_iterations = warm ? config_.warm_iterations : config_.iterations;
-  const bool check = config_.tolerance > 0.0;
+  stats.iterations = warm ? config_.warm_iterations : config_.iterations;
 
   std::vector<double> bxi = xi, bwx = wx, bwy = wy;
   std::vector<double> gxi(n), gwx(n), gwy(n);
-  std::vector<double> xi_checked;
-  if (check) xi_checked = xi;
-  int it = 0;
-  while (it < max_iterations) {
+  for (int it = 0; it < stats.iterations; ++it) {
     // Dual ascent + projection onto the unit box; accumulate K^T p on the fly.
     std::fill(gxi.begin(), gxi.end(), 0.0);
     std::fill(gwx.begin(), gwx.end(), 0.0);
@@ -211,25 +205,7 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
       bwx[i] = wx[i] + config_.theta * (wx[i] - wx_old);
       bwy[i] = wy[i] + config_.theta * (wy[i] - wy_old);
     }
-    ++it;
-    // Only the inverse depths reach the mesh: stop when they no longer move. Relative to each
-    // vertex's own inverse depth, so near and far vertices count alike.
-    if (check && it % config_.check_every == 0 && it < max_iterations) {
-      double sum = 0.0;
-      for (int i = 0; i < n; ++i) {
-        const double scale = std::max(std::abs(xi[i]), 1e-9);
-        const double d = (xi[i] - xi_checked[i]) / scale;
-        sum += d * d;
-      }
-      xi_checked = xi;
-      stats.last_change = std::sqrt(sum / n) / config_.check_every;
-      if (stats.last_change < config_.tolerance) {
-        stats.converged = true;
-        break;
-      }
-    }
   }
-  stats.iterations = it;
 
   for (int i = 0; i < n; ++i)
     if (xi[i] > 0.0 && std::isfinite(xi[i])) V[i].inv_depth = xi[i] * unit;

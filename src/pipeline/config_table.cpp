@@ -313,10 +313,6 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("nltgv_lambda", &d.nltgv.lambda, "weight of the L1 data term");
   t.key("nltgv_iterations", &d.nltgv.iterations, "primal-dual iterations (cold start)");
   t.key("nltgv_warm_iterations", &d.nltgv.warm_iterations, "iterations when most vertices were warm-started");
-  t.key("nltgv_tolerance", &d.nltgv.tolerance,
-        "early stop: RMS relative change of the inverse depths per iteration below which the iterations stop "
-        "(0: always run the full count)");
-  t.key("nltgv_check_every", &d.nltgv.check_every, "iterations between two checks of that change (>= 1)");
   t.key("nltgv_theta", &d.nltgv.theta, "over-relaxation, [0, 1]");
   t.key("nltgv_support_sigma", &d.nltgv.support_sigma,
         "relative inverse-depth jump scale of the support weights (0: all weights 1)");

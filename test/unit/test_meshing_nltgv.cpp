@@ -140,50 +140,9 @@ TEST(Nltgv, SameResultInAnyMapUnit) {
   }
 }
 
-TEST(Nltgv, EarlyStopOnConvergedProblemMatchesFullRun) {
-  // A long budget on a noisy plane with outliers: the solution settles long before it ends, so
-  // the stop must end early and give the inverse depths of the full run.
-  std::vector<double> truth;
-  const FrameMesh base = noisyMesh(slantedPlane(), 0.02, 0.03, 18, &truth);
-  NltgvConfig full_cfg;
-  full_cfg.iterations = 1000;
-  full_cfg.tolerance = 0.0;
-  FrameMesh full = base;
-  const NltgvStats full_stats = NltgvDenoiser(full_cfg).denoise(&full, testImage().K);
-  EXPECT_EQ(full_stats.iterations, 1000);
-  EXPECT_FALSE(full_stats.converged);
-  NltgvConfig stop_cfg = full_cfg;
-  stop_cfg.tolerance = 1e-4;
-  stop_cfg.check_every = 10;
-  FrameMesh stopped = base;
-  const NltgvStats stop_stats = NltgvDenoiser(stop_cfg).denoise(&stopped, testImage().K);
-  double worst = 0.0, mean = 0.0;
-  for (std::size_t i = 0; i < full.vertices.size(); ++i) {
-    const double d = std::abs(stopped.vertices[i].inv_depth / full.vertices[i].inv_depth - 1.0);
-    worst = std::max(worst, d);
-    mean += d / static_cast<double>(full.vertices.size());
-  }
-  // Measured: stops at 170 of 1000 iterations, max relative difference 0.011, mean 0.0015, its
-  // error against the truth 1.4x the full run's (both far below the noise's 0.011).
-  EXPECT_TRUE(stop_stats.converged);
-  EXPECT_LT(stop_stats.iterations, 260);
-  EXPECT_EQ(stop_stats.iterations % stop_cfg.check_every, 0);
-  EXPECT_LT(stop_stats.last_change, stop_cfg.tolerance);
-  EXPECT_LT(worst, 0.017);
-  EXPECT_LT(mean, 0.0023);
-  EXPECT_LT(meanAbsError(stopped, truth, true), 1.6 * meanAbsError(full, truth, true));
-  EXPECT_LT(meanAbsError(stopped, truth, true), 0.1 * meanAbsError(base, truth, false));
-}
-
 TEST(Nltgv, ConfigValidation) {
   NltgvConfig cfg;
   cfg.lambda = 0.0;
-  EXPECT_THROW(NltgvDenoiser{cfg}, std::invalid_argument);
-  cfg = NltgvConfig{};
-  cfg.tolerance = -1e-3;
-  EXPECT_THROW(NltgvDenoiser{cfg}, std::invalid_argument);
-  cfg = NltgvConfig{};
-  cfg.check_every = 0;
   EXPECT_THROW(NltgvDenoiser{cfg}, std::invalid_argument);
 }
 

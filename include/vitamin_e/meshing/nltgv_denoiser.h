@@ -38,17 +38,11 @@ struct NltgvConfig {
   double min_support = 0.02;       // floor of the support weights
   bool warm_start = true;          // keep the solution by track id for the next call
   bool warm_start_primal = false;  // also start from the previous inverse depths/gradients (else only the duals)
-  double tolerance = 0.0;          // early stop (0: off): see check_every
-  int check_every = 10;            // every this many iterations, the RMS over the vertices of the relative change
-                                   // of the inverse depth since the last check, divided by check_every, is
-                                   // compared with tolerance; below it the iterations stop
   void validate() const;           // throws std::invalid_argument naming the key
 };
 
 struct NltgvStats {
-  int iterations = 0;            // iterations run
-  bool converged = false;        // stopped early by the tolerance
-  double last_change = 0.0;      // the last checked change per iteration (0 before any check)
+  int iterations = 0;
   std::size_t warm_started = 0;  // vertices initialised from the previous call
   std::size_t edges = 0;
 };
