@@ -2,7 +2,7 @@
 // render of /work/shared/tools/render_sequence.py with exact ground truth.
 //   bench_fusion_dense RENDER_DIR [--config YAML] [--gt-input] [--step N] [--max-frames N]
 //       [--voxel-lo M] [--voxel-hi M] [--trunc-voxels N] [--max-depth-2p5 M] [--weight-ref M] [--out DIR]
-//       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--beta B] [--lambda L]
+//       [--no-nltgv] [--no-warm] [--nltgv-iters N] [--warm-iters N] [--beta B] [--lambda L]
 //       GT input only: [--points N] [--noise REL] [--outliers RATE]
 // Default (SLAM input): runs pipeline::System (sequential, as vitamin_e_run) on
 // every frame of the render with --config; every --step-th tracked frame's
@@ -24,6 +24,8 @@
 // points seen within that range from the ground-truth poses of the used frames.
 // --max-frames N limits the input to N meshed frames (SLAM: the first N * step images).
 // Prints per-stage timings and, as the last line, a JSON summary.
+// The denoiser's instructions alone: run under valgrind --tool=callgrind --instr-atstart=no
+// (only the NLTGV calls are instrumented; the rest runs at valgrind's uninstrumented speed).
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -31,6 +33,13 @@
 #include <random>
 #include <sstream>
 #include <unordered_map>
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#endif
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -120,6 +129,7 @@ void applyNltgvOptions(const Args& a, meshing::NltgvConfig* c) {
   if (a.nltgv_iters >= 0) c->iterations = a.nltgv_iters;
   if (a.beta >= 0) c->beta = a.beta;
   if (a.lambda >= 0) c->lambda = a.lambda;
+  c->validate();
 }
 
 // One frame's input to the dense reconstruction (what the SLAM pipeline provides).
@@ -374,6 +384,7 @@ int main(int argc, char** argv) try {
 
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<double> nltgv_iters;  // iterations run per denoised frame
   std::vector<double> raw_err, smooth_err, raw_dense, smooth_dense, mesh_ms, t15_ms, t25_ms, mesh_cpu, t15_cpu, t25_cpu,
       verts;
   std::vector<Vector3d> seen;  // points on true surfaces the camera saw (completeness)
@@ -389,7 +400,10 @@ int main(int argc, char** argv) try {
     const meshing::FrameMesh raw = mesh;
     if (denoise && !mesh.triangles.empty()) {
       ScopedTimer t(&timings, "nltgv");
-      nltgv.denoise(&mesh, K);
+      CALLGRIND_START_INSTRUMENTATION;
+      const meshing::NltgvStats st = nltgv.denoise(&mesh, K);
+      CALLGRIND_STOP_INSTRUMENTATION;
+      nltgv_iters.push_back(st.iterations);
     }
     {
       ScopedTimer t(&timings, "prune");
@@ -490,9 +504,12 @@ int main(int argc, char** argv) try {
     std::printf("Sim(3) to ground truth: scale %.4f m per map unit, ATE rmse %.4f m; voxels %.4f / %.4f map units\n", s,
                 ate_rmse, c15.voxel_size, c25.voxel_size);
   }
-  std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm)\n",
+  double nltgv_iters_mean = 0.0;
+  for (double v : nltgv_iters) nltgv_iters_mean += v / static_cast<double>(nltgv_iters.size());
+  std::printf("frames meshed: %zu (every %d), vertices/frame median %.0f, nltgv %s (%d iters, %d warm; ran %.1f per "
+              "frame on average)\n",
               frames.size(), args.step, median(verts), denoise ? "on" : "off", nltgv_cfg.iterations,
-              nltgv_cfg.warm_iterations);
+              nltgv_cfg.warm_iterations, nltgv_iters_mean);
   std::printf("%s", timings.table().c_str());
   std::printf("wall ms/frame (min / median), thread CPU ms/frame (min / median):\n");
   std::printf("  mesh (delaunay+nltgv+prune): %7.2f / %7.2f   cpu %7.2f / %7.2f\n", min_of(mesh_ms), median(mesh_ms),
@@ -521,11 +538,11 @@ int main(int argc, char** argv) try {
       "\"raw_dense_depth_err_median\":%.5f,\"nltgv_dense_depth_err_median\":%.5f,\"mesh_cpu_ms_per_frame\":%.2f,"
       "\"tsdf_cpu_ms_15cm\":%.2f,\"tsdf_cpu_ms_2p5cm\":%.2f,\"accuracy_median_15cm_m\":%.4f,"
       "\"completeness_5cm_15cm\":%.4f,\"input\":\"%s\",\"sim3_scale\":%.5f,\"ate_rmse_m\":%.5f,\"frames\":%zu,"
-      "\"accuracy_median_runner_m\":%.4f,\"completeness_5cm_runner\":%.4f}\n",
+      "\"accuracy_median_runner_m\":%.4f,\"completeness_5cm_runner\":%.4f,\"nltgv_iterations_mean\":%.2f}\n",
       median(acc25), percentile(acc25, 90), comp25, median(raw_err), median(smooth_err), median(mesh_ms),
       median(t15_ms), median(t25_ms), median(raw_dense), median(smooth_dense), median(mesh_cpu), median(t15_cpu),
       median(t25_cpu), median(acc15), comp15, args.gt_input ? "gt" : "slam", s, ate_rmse, frames.size(),
-      accrun.empty() ? 0.0 : median(accrun), comprun);
+      accrun.empty() ? 0.0 : median(accrun), comprun, nltgv_iters_mean);
   return 0;
 } catch (const std::exception& e) {
   vitamin_e::cli::fail(e.what());
