@@ -264,6 +264,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("window", &g.window, "the map's current height is the median of this many last measurements (>= 1)");
   t.key("tolerance", &g.tolerance,
         "a scale error (reference / current height - 1) within this share is noise: no correction, [0, 1)");
+  t.key("spread_factor", &g.spread_factor,
+        "the tolerance grows by this x the spread of the window's heights (median relative deviation from "
+        "their median): disagreeing measurements must be further off to correct (>= 0; 0: fixed tolerance)");
   t.key("gain", &g.gain, "share of the scale error beyond the tolerance corrected at each keyframe, (0, 1]");
   t.key("max_change", &g.max_change,
         "a plane whose height is off the map's current one by more than this share is not taken for the road, (0, 1)");

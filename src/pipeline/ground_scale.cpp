@@ -15,6 +15,7 @@ void GroundScaleConfig::validate() const {
   if (!(min_inlier_budget_fraction >= 0.0 && min_inlier_budget_fraction <= 1.0))
     throw std::invalid_argument("ground.min_inlier_budget_fraction: must be in [0, 1]");
   if (!(tolerance >= 0.0 && tolerance < 1.0)) throw std::invalid_argument("ground.tolerance: must be in [0, 1)");
+  if (!(spread_factor >= 0.0)) throw std::invalid_argument("ground.spread_factor: must be >= 0");
   if (!(gain > 0.0 && gain <= 1.0)) throw std::invalid_argument("ground.gain: must be in (0, 1]");
   if (!(max_change > 0.0 && max_change < 1.0)) throw std::invalid_argument("ground.max_change: must be in (0, 1)");
 }
@@ -51,9 +52,17 @@ ScaleCorrection GroundScale::update(const std::vector<Eigen::Vector3d>& points_c
   recent_.push_back(plane.height);
   if (static_cast<int>(recent_.size()) > config_.window) recent_.erase(recent_.begin());
   if (static_cast<int>(recent_.size()) < config_.window) return c;
-  const double error = reference_ / upperMedian(recent_) - 1.0;
-  if (std::abs(error) <= config_.tolerance) return c;
-  const double beyond = error > 0.0 ? error - config_.tolerance : error + config_.tolerance;
+  const double median = upperMedian(recent_);
+  const double error = reference_ / median - 1.0;
+  double allowed = config_.tolerance;
+  if (config_.spread_factor > 0.0) {
+    std::vector<double> deviations;
+    deviations.reserve(recent_.size());
+    for (double h : recent_) deviations.push_back(std::abs(h / median - 1.0));
+    allowed += config_.spread_factor * upperMedian(deviations);
+  }
+  if (std::abs(error) <= allowed) return c;
+  const double beyond = error > 0.0 ? error - allowed : error + allowed;
   c.factor = 1.0 + config_.gain * beyond;
   for (double& h : recent_) h *= c.factor;  // the map they measured was rescaled
   return c;
