@@ -68,6 +68,28 @@ TEST(GroundScale, NoiseWithinTheToleranceChangesNothing) {
   }
 }
 
+// Heights that disagree among themselves (a plane that caught a kerb or a car for a few
+// keyframes) correct only when their median is off by more than the tolerance plus
+// spread_factor x their spread; the same median from heights that agree corrects.
+TEST(GroundScale, ScatteredHeightsMustBeFurtherOffToCorrect) {
+  const auto last_factor = [](const std::vector<double>& heights, double spread_factor) {
+    GroundScaleConfig config = enabled();
+    config.spread_factor = spread_factor;
+    GroundScale ground(config);
+    for (int k = 0; k < 3; ++k) ground.update(roadAt(1.0, k), 0.1);  // the reference height: 1.0
+    ScaleCorrection c;
+    for (std::size_t k = 0; k < heights.size(); ++k) c = ground.update(roadAt(heights[k], 10 + k), 0.1);
+    EXPECT_TRUE(c.measured);
+    return c.factor;
+  };
+  // Both windows' median is 0.94: 6.4 % off, beyond the 5 % tolerance.
+  const std::vector<double> agreeing = {0.94, 0.94, 0.94, 0.94, 0.94};
+  const std::vector<double> scattered = {0.98, 0.90, 0.94, 0.98, 0.90};  // spread 4.3 %: 7.1 % allowed
+  EXPECT_GT(last_factor(agreeing, 0.5), 1.0);
+  EXPECT_EQ(last_factor(scattered, 0.5), 1.0);
+  EXPECT_GT(last_factor(scattered, 0.0), 1.0) << "a fixed tolerance corrects them";
+}
+
 TEST(GroundScale, ReferenceIsTheMedianOfTheFirstKeyframes) {
   GroundScale ground(enabled());
   EXPECT_EQ(ground.update(roadAt(1.0), 0.1).reference, 0.0);
@@ -109,6 +131,9 @@ TEST(GroundScale, DisabledOrResetKeepsNoState) {
 TEST(GroundScale, BadConfigIsRefusedByName) {
   GroundScaleConfig c = enabled();
   c.gain = 0.0;
+  EXPECT_THROW(c.validate(), std::invalid_argument);
+  c = enabled();
+  c.spread_factor = -1.0;
   EXPECT_THROW(c.validate(), std::invalid_argument);
   c = enabled();
   c.window = 0;
