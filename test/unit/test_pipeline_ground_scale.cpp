@@ -78,7 +78,7 @@ TEST(GroundScale, ScatteredHeightsMustBeFurtherOffToCorrect) {
     GroundScale ground(config);
     for (int k = 0; k < 3; ++k) ground.update(roadAt(1.0, k), 0.1);  // the reference height: 1.0
     ScaleCorrection c;
-    for (std::size_t k = 0; k < heights.size(); ++k) c = ground.update(roadAt(heights[k], 10 + k), 0.1);
+    for (int k = 0; k < static_cast<int>(heights.size()); ++k) c = ground.update(roadAt(heights[k], 10 + k), 0.1);
     EXPECT_TRUE(c.measured);
     return c.factor;
   };

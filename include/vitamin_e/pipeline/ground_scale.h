@@ -32,9 +32,9 @@ struct GroundScaleConfig {
   // deviations from their median): measurements that disagree among themselves (a plane that
   // caught a kerb for a few keyframes) must be further off before they correct (0: fixed tolerance).
   double spread_factor = 0.5;
-  double gain = 0.5;            // share of the scale error beyond the tolerance corrected per keyframe, (0, 1]
-  double max_change = 0.1;      // a height off the map's current one by more than this share is not the road: ignored
-  void validate() const;        // throws std::invalid_argument naming the key
+  double gain = 0.5;        // share of the scale error beyond the tolerance corrected per keyframe, (0, 1]
+  double max_change = 0.1;  // a height off the map's current one by more than this share is not the road: ignored
+  void validate() const;    // throws std::invalid_argument naming the key
 };
 
 // One keyframe's measurement and what it did.
