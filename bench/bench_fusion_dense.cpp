@@ -474,6 +474,7 @@ int main(int argc, char** argv) try {
   if (tsdf_run) mrun = transformed(tsdf_run->extractMesh(), S);
   auto accuracy = [&](const fusion::TriangleMesh& m) {
     std::vector<double> d;
+    d.reserve(m.vertices.size());
     for (const auto& p : m.vertices) d.push_back(dense_bench::surfaceDistance(scene, p.cast<double>()));
     return d;
   };

@@ -15,7 +15,7 @@
 namespace vitamin_e::cli {
 
 [[noreturn]] inline void fail(const std::string& msg) {
-  std::cerr << "error: " << msg << std::endl;
+  std::cerr << "error: " << msg << '\n';  // std::exit flushes
   std::exit(2);
 }
 

@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
                 << ve::summary(r, cfg);
       if (!aligned_out.empty()) std::cout << "aligned estimate written to " << aligned_out << "\n";
     }
-    std::cout << ve::toJson(r, cfg) << std::endl;
+    std::cout << ve::toJson(r, cfg) << '\n';
   } catch (const std::exception& e) {
     fail(e.what());
   }

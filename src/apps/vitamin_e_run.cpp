@@ -198,6 +198,7 @@ std::size_t parseCount(const std::string& key, const std::string& v) {
   try {
     n = std::stoll(v, &pos);
   } catch (const std::exception&) {
+    n = -1;  // not a number, or out of range: the message below says what is wanted
   }
   if (pos != v.size() || n < 0) fail(key + " needs a non-negative integer, got '" + v + "'");
   return static_cast<std::size_t>(n);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <fstream>
 #include <string_view>
@@ -117,7 +118,8 @@ BinaryFileContents readBinaryFile(const std::string& path, const std::string& ma
   BinaryFileContents out;
   out.header_line = data.substr(0, eol);
   int found = 0;
-  if (std::sscanf(out.header_line.c_str() + magic.size(), "%d,", &found) != 1) {
+  const char* const version_end = out.header_line.data() + out.header_line.size();
+  if (std::from_chars(out.header_line.data() + magic.size(), version_end, found).ec != std::errc()) {
     throw BinaryFileError(what + ": damaged header line '" + out.header_line + "'");
   }
   if (found < oldest_version || found > newest_version) {

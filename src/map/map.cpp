@@ -258,12 +258,15 @@ bool Map::relabelLandmark(std::uint64_t old_id, std::uint64_t new_id, std::uint6
   landmarks_.erase(it);
   l.id = new_id;
   for (Keyframe& kf : keyframes_) {
-    auto o = kf.observations.find(old_id);
-    if (o != kf.observations.end()) {
-      kf.observations.emplace(new_id, o->second);
-      kf.observations.erase(o);
-    } else if ((o = kf.observations.find(new_id)) != kf.observations.end()) {
-      l.observations.push_back({kf.frame_index, o->second});
+    const auto old_obs = kf.observations.find(old_id);
+    if (old_obs != kf.observations.end()) {
+      kf.observations.emplace(new_id, old_obs->second);
+      kf.observations.erase(old_obs);
+      continue;
+    }
+    const auto new_obs = kf.observations.find(new_id);
+    if (new_obs != kf.observations.end()) {
+      l.observations.push_back({kf.frame_index, new_obs->second});
       ++l.num_observations;
     }
   }

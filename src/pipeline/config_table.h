@@ -115,6 +115,7 @@ class Table {
       try {
         text = node.IsScalar() ? node.Scalar() : YAML::Dump(node);
       } catch (const std::exception&) {
+        text.clear();  // not printable: matches no name, the error below lists the names
       }
       for (const auto& [n, v] : names) {
         if (n == text) {

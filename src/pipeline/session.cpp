@@ -1,6 +1,7 @@
 #include "vitamin_e/pipeline/session.h"
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -186,13 +187,18 @@ std::vector<TrajectorySegment> readSegmentsTum(const std::string& path) {
       s.map = s.number;
       const std::size_t colon = line.find(": ");
       const std::string head = line.substr(0, colon);
+      // "# segment N (map M)", or "# segment N" (written before maps were numbered).
+      const char* const end = head.data() + head.size();
       unsigned number = 0, map = 0;
-      if (std::sscanf(head.c_str(), "# segment %u (map %u)", &number, &map) == 2) {
-        s.number = number;
-        s.map = map;
-      } else if (std::sscanf(head.c_str(), "# segment %u", &number) == 1) {
+      const auto n = std::from_chars(head.data() + std::strlen(kSegment), end, number);
+      if (n.ec == std::errc()) {
         s.number = number;
         s.map = number;
+        constexpr std::string_view kMap = " (map ";
+        if (std::string_view(n.ptr, static_cast<std::size_t>(end - n.ptr)).rfind(kMap, 0) == 0 &&
+            std::from_chars(n.ptr + kMap.size(), end, map).ec == std::errc()) {
+          s.map = map;
+        }
       }
       s.note = colon == std::string::npos ? "" : line.substr(colon + 2);
       segments.push_back(std::move(s));

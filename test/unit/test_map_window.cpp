@@ -266,6 +266,7 @@ TEST(Map, ATurnRetiresACrowdedKeyframeNotTheWideOne) {
   cfg.max_keyframes = 5;
   Map map(cfg);
   std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> points;
+  points.reserve(40);
   for (std::uint64_t i = 0; i < 40; ++i) {
     points.emplace_back(i, Eigen::Vector3d(-2.0 + 0.1 * double(i), 0.5 * double(i % 3) - 0.5, 8.0));
   }

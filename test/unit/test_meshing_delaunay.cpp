@@ -19,7 +19,7 @@ int hullBoundaryCount(std::vector<Vector2d> p) {
   std::sort(p.begin(), p.end(),
             [](const Vector2d& a, const Vector2d& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   std::vector<Vector2d> h;
-  auto build = [&](auto begin, auto end) {
+  auto build = [&](const auto& begin, const auto& end) {
     const std::size_t base = h.size();
     for (auto it = begin; it != end; ++it) {
       while (h.size() >= base + 2 && orient2d(h[h.size() - 2], h.back(), *it) < 0.0) h.pop_back();

@@ -26,7 +26,7 @@ int take(Queue& q) {
     command();
     return -1;
   }
-  return *frame;
+  return frame.value_or(-3);  // -3: neither a command nor a frame, which next() never gives
 }
 
 }  // namespace

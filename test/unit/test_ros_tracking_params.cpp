@@ -170,7 +170,7 @@ TEST(RosTrackingParams, FilesLoadedOrTheParameterNamed) {
   const TrackingFiles files = loadTrackingFiles(p);
   EXPECT_EQ(files.system_config.describe(), vitamin_e::pipeline::loadSystemConfig(p.config_file).describe());
   ASSERT_TRUE(files.calibration.has_value());
-  EXPECT_TRUE(files.calibration->camera.valid());
+  EXPECT_TRUE(files.calibration.value_or(vitamin_e::camera::CameraCalibration{}).camera.valid());
 
   TrackingParams missing;
   missing.config_file = "/nonexistent/slam.yaml";

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <mutex>
 
@@ -181,6 +182,29 @@ TEST(SystemSession, SegmentsFileReadsBack) {
   ASSERT_EQ(back[0].poses.size(), 2u);
   EXPECT_NEAR(back[0].poses[1].T_w_c.translation().y(), 4.0, 1e-9);
   EXPECT_FALSE(pl::saveSegmentsTum(segments, "T_map_c", "/nonexistent/dir/x.txt", &error));
+}
+
+TEST(SystemSession, SegmentsFileHeadersWithAndWithoutTheMap) {
+  const std::string path = ::testing::TempDir() + "/session_segment_headers.txt";
+  {
+    std::ofstream out(path);
+    out << "# timestamp tx ty tz qx qy qz qw (T_map_c)\n"
+        << "# segment 2: written before maps were numbered\n"
+        << "1.0 0 0 0 0 0 0 1\n"
+        << "# segment 5 (map 2): time jump\n"
+        << "2.0 1 0 0 0 0 0 1\n"
+        << "# segment x: not a number\n";
+  }
+  const auto back = pl::readSegmentsTum(path);
+  ASSERT_EQ(back.size(), 3u);
+  EXPECT_EQ(back[0].number, 2u);
+  EXPECT_EQ(back[0].map, 2u);
+  EXPECT_EQ(back[0].note, "written before maps were numbered");
+  EXPECT_EQ(back[1].number, 5u);
+  EXPECT_EQ(back[1].map, 2u);
+  EXPECT_EQ(back[1].poses.size(), 1u);
+  EXPECT_EQ(back[2].number, 3u);  // unreadable: numbered by its place in the file
+  EXPECT_EQ(back[2].map, 3u);
 }
 
 

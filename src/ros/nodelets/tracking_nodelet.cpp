@@ -445,6 +445,7 @@ void TrackingNodelet::slamLoop() {
       command();
       continue;
     }
+    if (!frame) continue;  // next() gives a command or a frame; this keeps the check local
     {
       std::lock_guard<std::mutex> lock(stats_mutex_);
       stats_.queue_wait_s.push_back(ros::WallTime::now().toSec() - frame->received_wall);
