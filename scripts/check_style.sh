@@ -16,9 +16,8 @@ case "${1:-}" in
   -h|--help) sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
 esac
 [ $# -le 1 ] || ve_die "usage: check_style.sh [BASE]"
-for tool in clang-format clang-tidy; do
-  command -v "$tool" >/dev/null || ve_die "$tool is not installed (./scripts/setup.sh installs it)"
-done
+command -v clang-format >/dev/null || ve_die "clang-format is not installed (./scripts/setup.sh installs it)"
+clang_tidy=$(ve_clang_tidy)
 
 if [ $# -eq 1 ]; then
   git rev-parse --verify --quiet "$1^{commit}" >/dev/null || ve_die "check_style.sh: '$1' is not a commit"
@@ -94,7 +93,7 @@ tidy=0
 for f in "${files[@]}"; do
   mapfile -t flags < <(flags_for "$f")
   tidy_failed=0
-  if ! clang-tidy --quiet "$f" -- "${flags[@]}" >"$tidy_log" 2>&1; then tidy_failed=1; fi
+  if ! "$clang_tidy" --quiet "$f" -- "${flags[@]}" >"$tidy_log" 2>&1; then tidy_failed=1; fi
   # Only what is in the file itself (HeaderFilterRegex in .clang-tidy is empty).
   if grep -q -E '(warning|error):' "$tidy_log"; then
     grep -E '(warning|error):' "$tidy_log" | sed "s|^$VE_ROOT/||" | sed 's/^/    /'

@@ -38,6 +38,11 @@ ve_bench_bin() {
   [ -x "$bin" ] || ve_die "$bin is missing: build first (./scripts/build.sh --target $1)"
   echo "$bin"
 }
+# ve_clang_tidy: the one clang-tidy the style checks use (scripts/setup.sh installs it); its
+# checks differ from version to version, so CI and developers must run the same one.
+ve_clang_tidy() {
+  command -v clang-tidy-22 || ve_die "clang-tidy-22 is not installed (./scripts/setup.sh installs it)"
+}
 # True when any argument asks for help.
 ve_wants_help() {
   local a
