@@ -10,6 +10,9 @@ namespace vitamin_e::map {
 void MapConfig::validate() const {
   if (max_keyframes < 2) throw std::invalid_argument("map.max_keyframes must be >= 2");
   if (keep_newest_keyframes < 1) throw std::invalid_argument("map.keep_newest_keyframes must be >= 1");
+  if (!(anchor_loss_share >= 0.0 && anchor_loss_share <= 1.0)) {
+    throw std::invalid_argument("map.anchor_loss_share must be in [0, 1]");
+  }
   if (!(archive_voxel_m >= 0.0)) throw std::invalid_argument("map.archive_voxel_m must be >= 0");
   if (min_observations_to_archive < 1) throw std::invalid_argument("map.min_observations_to_archive must be >= 1");
   if (max_archive_points < 2) throw std::invalid_argument("map.max_archive_points must be >= 2");
@@ -153,7 +156,7 @@ std::size_t Map::keyframeToRetire() const {
   // for each point, its widest angle between two observing keyframes' rays, with and
   // without the keyframe (only the two keyframes of the widest pair can lose any); or,
   // retire_fewest_reliant, how many points would keep less than half their widest angle.
-  std::vector<double> loss(static_cast<std::size_t>(n), 0.0);
+  std::vector<double> loss(static_cast<std::size_t>(n), 0.0), anchored(static_cast<std::size_t>(n), 0.0);
   std::vector<Eigen::Vector3d> rays;
   std::vector<int> observer;
   for (const auto& obs : keyframes_.back().observations) {
@@ -173,10 +176,12 @@ std::size_t Map::keyframeToRetire() const {
     if (a < 0) continue;
     for (int e : {a, b}) {
       const double without = widestAngle(rays, e);
+      anchored[static_cast<std::size_t>(observer[e])] += widest;
       loss[static_cast<std::size_t>(observer[e])] +=
           config_.retire_fewest_reliant ? (without < 0.5 * widest ? 1.0 : 0.0) : widest - without;
     }
   }
+  if (config_.retire_oldest_unless_anchor && !(loss[0] > config_.anchor_loss_share * anchored[0])) return 0;
   // The cheapest; among equals (none of them sees the current points) the oldest.
   int best = 0;
   for (int k = 1; k < candidates; ++k) {

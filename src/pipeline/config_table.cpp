@@ -182,6 +182,12 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("retire_fewest_reliant", &m.retire_fewest_reliant,
         "experimental, with retire_least_parallax: the keyframe fewest current points rely on leaves (without it "
         "their widest angle would be under half), not the one whose removal costs least angle");
+  t.key("retire_oldest_unless_anchor", &m.retire_oldest_unless_anchor,
+        "experimental, with retire_least_parallax: the oldest keyframe leaves unless the current points it "
+        "anchors (it is an end of their widest pair) would lose more than anchor_loss_share of their summed "
+        "angle without it; then the cheapest leaves");
+  t.key("anchor_loss_share", &m.anchor_loss_share,
+        "experimental, for retire_oldest_unless_anchor: the share of the angle, in [0, 1]");
   t.key("archive_voxel_m", &m.archive_voxel_m,
         "retired points archived: 0 = all, else one per voxel of this size (map units)");
   t.key("max_archive_points", &m.max_archive_points,

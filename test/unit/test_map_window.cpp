@@ -319,6 +319,39 @@ TEST(Map, KeyframesThatSeeNoPointLeaveOldestFirst) {
   EXPECT_EQ(windowFrames(map), (std::vector<std::uint64_t>{3, 4, 5}));
 }
 
+TEST(Map, TheAnchorRuleRetiresTheOldestOfAnEvenChainButNotAWideBaseline) {
+  // Experimental map.retire_oldest_unless_anchor. Keyframes 1 m apart, all seeing the same
+  // points: without the oldest the points keep 4/5 of their widest angle, so it leaves (the
+  // parallax rule keeps it and retires keyframe 1, which costs nothing). Keyframes 1 m apart
+  // and then 2 cm apart (a turn): without the oldest the points keep a tenth of their angle, so
+  // it stays and a crowded one leaves, as with the parallax rule.
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> points;
+  points.reserve(40);
+  for (std::uint64_t i = 0; i < 40; ++i) {
+    points.emplace_back(i, Eigen::Vector3d(-2.0 + 0.1 * double(i), 0.5 * double(i % 3) - 0.5, 8.0));
+  }
+  for (bool anchor : {false, true}) {
+    MapConfig cfg;
+    cfg.max_keyframes = 5;
+    cfg.retire_oldest_unless_anchor = anchor;
+    Map chain(cfg), turn(cfg);
+    for (const auto& p : points) {
+      chain.addLandmark(newLandmark(p.first, p.second, 1));
+      turn.addLandmark(newLandmark(p.first, p.second, 1));
+    }
+    for (std::uint64_t k = 0; k < 6; ++k)
+      chain.addKeyframe(keyframeObserving(k, Eigen::Vector3d(double(k), 0, 0), points));
+    turn.addKeyframe(keyframeObserving(0, Eigen::Vector3d(0, 0, 0), points));
+    for (std::uint64_t k = 1; k < 6; ++k) {
+      turn.addKeyframe(keyframeObserving(k, Eigen::Vector3d(1.0 + 0.02 * double(k - 1), 0, 0), points));
+    }
+    const std::vector<std::uint64_t> chain_expected =
+        anchor ? std::vector<std::uint64_t>{1, 2, 3, 4, 5} : std::vector<std::uint64_t>{0, 2, 3, 4, 5};
+    EXPECT_EQ(windowFrames(chain), chain_expected) << (anchor ? "anchor rule" : "parallax rule");
+    EXPECT_EQ(windowFrames(turn).front(), 0u) << (anchor ? "anchor rule" : "parallax rule");
+  }
+}
+
 TEST(Map, TheReliantRuleRetiresTheKeyframeFewestPointsNeed) {
   // A camera going back and forth. Keyframe 0 widens the angle of 40 points a little (the
   // newest keyframes see them from far enough apart); keyframe 1 is the only wide view of 2

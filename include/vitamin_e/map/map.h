@@ -93,8 +93,14 @@ struct MapConfig {
   // newest keyframe's points that rely on it (without it their widest angle is less than half),
   // not the angle they lose. Off: not yet better on every camera (docs/ROBUSTNESS.md).
   bool retire_fewest_reliant = false;
-  int keep_newest_keyframes = 3;  // >= 1
-  double archive_voxel_m = 0.0;   // 0: archive every retired landmark; >0: one per voxel (map units)
+  // Experimental, with retire_least_parallax: the oldest keyframe leaves unless the current points
+  // it anchors (it is one end of their widest pair) would lose more than anchor_loss_share of
+  // their summed angle without it; then the cheapest leaves, as above. Off: it holds a drone's
+  // render but is oldest-first on KITTI (docs/ROBUSTNESS.md).
+  bool retire_oldest_unless_anchor = false;
+  double anchor_loss_share = 0.5;  // in [0, 1]
+  int keep_newest_keyframes = 3;   // >= 1
+  double archive_voxel_m = 0.0;    // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
   // re-thins the archive to at most half the cap.
