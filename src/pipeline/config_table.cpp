@@ -215,6 +215,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("weak_pose_min_survival_ratio", &c.weak_pose_min_survival_ratio,
         "... and this frame kept at least this share of the usual share (median of the last 10 tracked frames) of "
         "the last frame's map tracks: fewer is a cut, whose survivors agree on any prediction (0: always)");
+  t.key("keyframe_on_weak_pose", &c.keyframe_on_weak_pose,
+        "experimental; false: a frame whose weak pose was kept (weak_pose_max_step_ratio) makes no keyframe, "
+        "so no points are triangulated from it");
   t.key("max_outlier_count", &c.max_outlier_count, "times a point may be an outlier before it is removed");
   t.key("max_reprojection_px", &c.max_reprojection_px,
         "an observation's residual after BA above which its point is flagged [px]");

@@ -361,7 +361,8 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, const Po
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   motion.update(T_w_c, frame.timestamp);
-  const KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
+  KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
+  if (pose.weak_kept && !config.keyframe_on_weak_pose) decision.needed = false;
   if (on_pose) {
     // The result so far holds the pose's covariance; the pose and the keyframe flag are these.
     FramePose pose = poseOf(*result);

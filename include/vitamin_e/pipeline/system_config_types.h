@@ -56,6 +56,7 @@ struct SystemConfig {
   double weak_pose_max_step_ratio = 2.0;      // ... unless its step is within this factor of the predicted one
   double weak_pose_min_survival_ratio = 0.5;  // ... and the last frame's map tracks survived at least this
                                               // share of the usual (median of the last 10 frames)
+  bool keyframe_on_weak_pose = true;          // false: a frame whose weak pose was kept makes no keyframe
   int max_outlier_count = 2;                  // times a point may be an outlier before it is removed
   double max_reprojection_px = 3.0;           // observation residual after BA above which a point is flagged
   int ba_fixed_keyframes = 2;                 // oldest keyframes held fixed in the keyframe BA (gauge and scale)
