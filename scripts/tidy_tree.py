@@ -5,7 +5,8 @@ project's headers, with a result cache. Run through ./scripts/tidy.sh (it picks 
 A unit's result is kept under ${XDG_CACHE_HOME:-~/.cache}/vitamin_e/tidy/, keyed by the
 clang-tidy version, every .clang-tidy of the tree, the header filter, the unit's compile command
 and its preprocessed text with comments (so a NOLINT counts); the checkout's and workspace's
-paths are left out of the key, so a fresh clone at the same commit reuses it. The preprocessing
+paths are left out of the key, so a fresh clone at the same commit reuses it. A result not used
+for 30 days is deleted. The preprocessing
 is g++'s (the build's compiler): a change that only clang's branches of a system header would
 see is missed; --no-cache checks everything again.
 """
@@ -21,6 +22,7 @@ import sys
 import time
 
 HEADER_FILTER = ".*/vitamin_e/(include|src|test|bench)/.*"
+CACHE_DAYS = 30
 FINDING = re.compile(r"(warning|error): ")
 
 
@@ -59,8 +61,7 @@ def preprocess_command(entry):
 
 
 def check_unit(entry, tidy, db_dir, common_key, paths, cache_dir, read_cache):
-    """Returns (file, findings, from_cache, seconds); findings are lines, paths relative."""
-    start = time.monotonic()
+    """Returns (findings, from_cache); findings are lines, paths relative to the checkout."""
     src = entry["file"]
     key = None
     pre = subprocess.run(preprocess_command(entry), cwd=entry["directory"], capture_output=True)
@@ -71,8 +72,9 @@ def check_unit(entry, tidy, db_dir, common_key, paths, cache_dir, read_cache):
         key = h.hexdigest()
         cached = os.path.join(cache_dir, key[:2], key)
         if read_cache and os.path.isfile(cached):
+            os.utime(cached)  # used: kept by the pruning in main()
             with open(cached) as f:
-                return src, f.read().splitlines(), True, time.monotonic() - start
+                return f.read().splitlines(), True
     run = subprocess.run([tidy, "-p", db_dir, "--quiet", "--header-filter=" + HEADER_FILTER, src],
                          capture_output=True, text=True)
     text = paths.strip(re.sub(r"\x1b\[[0-9;]*m", "", run.stdout + run.stderr))
@@ -87,7 +89,7 @@ def check_unit(entry, tidy, db_dir, common_key, paths, cache_dir, read_cache):
         with open(tmp, "w") as f:
             f.write("".join(line + "\n" for line in findings))
         os.replace(tmp, path)
-    return src, findings, False, time.monotonic() - start
+    return findings, False
 
 
 def main():
@@ -128,10 +130,17 @@ def main():
         jobs = [pool.submit(check_unit, e, a.clang_tidy, db_dir, common.digest(), paths, cache_dir, not a.no_cache)
                 for e in units]
         for job in concurrent.futures.as_completed(jobs):
-            _, unit_findings, cached, _ = job.result()
+            unit_findings, cached = job.result()
             hits += cached
             findings.update(unit_findings)
     took = time.monotonic() - start
+    # Results unused for CACHE_DAYS go: a header change leaves one stale entry per unit.
+    cutoff = time.time() - CACHE_DAYS * 86400
+    for d, _, names in os.walk(cache_dir):
+        for name in names:
+            path = os.path.join(d, name)
+            if os.path.getmtime(path) < cutoff:
+                os.remove(path)
     summary = "%d unit(s) checked, %d from the cache, %.0f s" % (len(units), hits, took)
     if findings:
         print("\n".join(sorted(findings)))
