@@ -14,8 +14,9 @@ Extra flags go to vitamin_e_run, e.g. `--start-frame 50`.
 A variant is the clip's own CONFIG with the listed keys changed ("NAME" alone:
 unchanged). The first variant is the reference: the last rows give, per
 variant, the geometric mean of the ATE ratio to it and the worst clip. A cell is
-the ATE in cm; '!' marks a run that did not track every frame after its
-initialization or started a new map, 'x' one that failed. Dense reconstruction
+the ATE in cm; '!N%' marks a run that tracked only N % of the frames after its
+initialization, 'iN' one that started N new maps, 'rN' one that relocalized N
+times, 'x' one that failed. Dense reconstruction
 is off unless --dense (it does not change the trajectory, only the time).
 --keep reuses an earlier run of the same clip and config in DIR (same binaries:
 the caller's promise). Outputs: DIR/<variant>/<clip>/ (trajectory, stats,
@@ -140,8 +141,12 @@ def run_and_evaluate(clip, args, out, cfg):
 def cell(r):
     if r.get("rc") != 0 or r.get("ate_m") is None:
         return "x"
-    mark = "" if (r.get("success_after_init") or 0) >= 1.0 and not r.get("init_retries") else " !"
-    return "%.2f%s" % (100.0 * r["ate_m"], mark)
+    tracked = r.get("success_after_init") or 0
+    mark = "" if tracked >= 1.0 and not r.get("init_retries") else " !%.0f%%" % (100.0 * tracked)
+    if r.get("init_retries"):
+        mark += " i%d" % r["init_retries"]
+    relocs = r.get("relocalizations") or 0
+    return "%.2f%s%s" % (100.0 * r["ate_m"], mark, " r%d" % relocs if relocs else "")
 
 
 def main():
