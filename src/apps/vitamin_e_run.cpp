@@ -82,8 +82,9 @@ const char* const kUsage =
     "                   the same map): the mesh of the mapped place is there from the start\n"
     "  --save-tsdf FILE write the TSDF voxel blocks at the end\n"
     "counters of --log-frames (pipeline::FrameDiagnostics; summarized in stats.json frame_diagnostics):\n"
-    "  born=N lost=N(reason:N,...) dropped=N  tracks detected / ended by the tracker (by its check) /\n"
-    "                   ended by the back end (outliers) this frame\n"
+    "  born=N lost=N(reason:N,...) dropped=N prior=N  tracks detected / ended by the tracker (by its\n"
+    "                   check) / ended by the back end (outliers) / found again from their map point\n"
+    "                   seen from the predicted pose after the flow lost them, this frame\n"
     "  prev_map=T/P left=L in_view=V(reason:N,...)  of the P map points of the previous frame T are\n"
     "                   still tracked; of the ended ones L project outside the image at this pose, V\n"
     "                   inside; all ended ones by the tracker's check (dropped: by the back end)\n"
@@ -121,14 +122,15 @@ std::string formatCounts(const std::map<std::string, int>& counts) {
 // One frame's FrameDiagnostics as the key=value tokens of --log-frames (see kUsage).
 std::string formatDiagnostics(const pl::FrameDiagnostics& d) {
   char buf[640];
-  std::snprintf(buf, sizeof(buf),
-                "born=%d lost=%d(%s) dropped=%d prev_map=%zu/%zu left=%zu in_view=%zu(%s) pose=%d/%d reuse=%d kf=%d "
-                "kf_par=%.1f tri=%d(%s) cand=%zu/%zu cand_par=%.2f kfs=%zu",
-                d.tracks_born, d.tracks_lost, formatCounts(d.lost_by).c_str(), d.tracks_dropped, d.prev_map_tracked,
-                d.prev_map_points, d.prev_map_left_view, d.prev_map_lost_in_view,
-                formatCounts(d.prev_map_lost_by).c_str(), d.pose_inliers, d.pose_points, d.reused, d.keyframe ? 1 : 0,
-                d.keyframe_parallax_px, d.triangulated, formatCounts(d.triangulation_rejected_by).c_str(), d.candidates,
-                d.candidates_two_keyframes, d.candidate_parallax_deg, d.keyframes);
+  std::snprintf(
+      buf, sizeof(buf),
+      "born=%d lost=%d(%s) dropped=%d prior=%d prev_map=%zu/%zu left=%zu in_view=%zu(%s) pose=%d/%d reuse=%d kf=%d "
+      "kf_par=%.1f tri=%d(%s) cand=%zu/%zu cand_par=%.2f kfs=%zu",
+      d.tracks_born, d.tracks_lost, formatCounts(d.lost_by).c_str(), d.tracks_dropped, d.tracks_from_prior,
+      d.prev_map_tracked, d.prev_map_points, d.prev_map_left_view, d.prev_map_lost_in_view,
+      formatCounts(d.prev_map_lost_by).c_str(), d.pose_inliers, d.pose_points, d.reused, d.keyframe ? 1 : 0,
+      d.keyframe_parallax_px, d.triangulated, formatCounts(d.triangulation_rejected_by).c_str(), d.candidates,
+      d.candidates_two_keyframes, d.candidate_parallax_deg, d.keyframes);
   std::string out = buf;
   if (d.relocalization != pl::RelocalizationOutcome::kNotTried) {
     out += std::string(" reloc=") + pl::toString(d.relocalization) + ":" + std::to_string(d.relocalization_inliers) +
@@ -149,6 +151,7 @@ void addCounters(const pl::FrameResult& r, io::RunStats* stats) {
   stats->addCounter("tracks_lost", d.tracks_lost);
   for (const auto& [why, n] : d.lost_by) stats->addCounter("tracks_lost_by_" + why, n);
   stats->addCounter("tracks_dropped", d.tracks_dropped);
+  stats->addCounter("tracks_from_prior", d.tracks_from_prior);
   if (d.prev_map_points > 0) {
     stats->addCounter("prev_map_tracked_fraction", d.prevMapTrackedFraction());
     stats->addCounter("prev_map_left_view", static_cast<double>(d.prev_map_left_view));

@@ -22,7 +22,8 @@ void validateImage(const cv::Mat& image, const camera::Camera& camera) {
 FrontEnd::FrontEnd(const tracking::TrackerConfig& config, const camera::Camera& camera)
     : camera_(camera), tracker_(config) {}
 
-TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
+TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
+                             const std::vector<tracking::TrackPrior>& priors) {
   validateImage(image, camera_);
   TrackedFrame f;
   f.timestamp = timestamp;
@@ -47,7 +48,7 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
     if (!drops.empty()) f.tracks_dropped = static_cast<int>(tracker_.dropTracks(drops));
   }
   const auto t0 = std::chrono::steady_clock::now();
-  tracking::TrackerFrame tf = tracker_.track(image, timestamp);
+  tracking::TrackerFrame tf = tracker_.track(image, timestamp, priors);
   f.tracks.reserve(tf.points.size());
   for (const tracking::TrackedPoint& p : tf.points) {
     FrameTrack t;
@@ -61,6 +62,7 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
   }
   f.tracks_born = tf.num_new;
   f.tracks_lost = tf.num_lost;
+  f.tracks_from_prior = tf.num_from_prior;
   f.lost_by = std::move(tf.lost_by);
   f.ended = std::move(tf.ended);
   f.tracking_ms = elapsedMs(t0);

@@ -36,6 +36,7 @@ EndedTracks takeTrackerCounts(TrackedFrame* f, FrameResult* result) {
   d.tracks_born = f->tracks_born;
   d.tracks_lost = f->tracks_lost;
   d.tracks_dropped = f->tracks_dropped;
+  d.tracks_from_prior = f->tracks_from_prior;
   d.lost_by = std::move(f->lost_by);
   EndedTracks ended = std::move(f->ended);
   std::sort(ended.begin(), ended.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -67,7 +68,14 @@ System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
       map(cfg.map) {}
 
 TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  TrackedFrame f = front_end.track(image, timestamp, timestamp_text);
+  std::shared_ptr<const TrackPriorSource> source;
+  {
+    std::lock_guard<std::mutex> lock(prior_mutex);
+    source = prior_source;
+  }
+  const std::vector<tracking::TrackPrior> priors =
+      source ? predictTrackPositions(*source, camera, timestamp) : std::vector<tracking::TrackPrior>{};
+  TrackedFrame f = front_end.track(image, timestamp, timestamp_text, priors);
   if (!f.skipped) timings.add("tracking", f.tracking_ms);
   return f;
 }
@@ -94,12 +102,35 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
     default: initialize(frame, &result);
   }
   describeFrame(frame, &result);
+  publishPriorSource(result);
   // total = the work of both stages for this frame (tracking + mapping).
   const double total = tracking_ms + elapsedMs(t_start);
   timings.add("total", total);
   result.timing_ms["total"] = total;
   ++counters.frames_processed;
   return result;
+}
+
+void System::Impl::clearPriorSource() {
+  std::lock_guard<std::mutex> lock(prior_mutex);
+  prior_source.reset();
+}
+
+// The tracker's priors for the next frame come from this frame's map tracks
+// and motion (tracker.retry_from_prior); none while the camera is not tracked.
+void System::Impl::publishPriorSource(const FrameResult& result) {
+  std::shared_ptr<TrackPriorSource> source;
+  if (result.pose_valid && motion.valid() && recovery.state() == TrackingState::kTracking &&
+      config.tracker.retry_from_prior) {
+    source = std::make_shared<TrackPriorSource>();
+    source->motion = motion;
+    source->p_w_by_track.reserve(prev_mapped_ids.size());
+    for (std::uint64_t id : prev_mapped_ids) {
+      if (const map::Landmark* l = map.landmark(id)) source->p_w_by_track.emplace_back(id, l->p_w);
+    }
+  }
+  std::lock_guard<std::mutex> lock(prior_mutex);
+  prior_source = std::move(source);
 }
 
 void System::Impl::describeFrame(const FrameContext& frame, FrameResult* result) {
@@ -529,6 +560,7 @@ void System::Impl::reset() {
   recovery.reset();
   front_end.reset();
   motion.invalidate();
+  clearPriorSource();
 }
 
 bool System::Impl::restartTracking() {
@@ -538,6 +570,7 @@ bool System::Impl::restartTracking() {
   prev_mapped_ids.clear();
   initializer.reset();
   motion.invalidate();
+  clearPriorSource();
   recovery.startRelocalizing();
   return true;
 }

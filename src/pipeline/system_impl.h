@@ -4,6 +4,7 @@
 // the tracking status, the trajectory). The per-frame data travels in a
 // FrameContext from stage to stage.
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <utility>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "vitamin_e/pipeline/recovery.h"
 #include "vitamin_e/pipeline/relocalizer.h"
 #include "vitamin_e/pipeline/system.h"
+#include "vitamin_e/pipeline/track_priors.h"
 #include "vitamin_e/pipeline/track_survival.h"
 
 namespace vitamin_e::pipeline {
@@ -128,6 +130,11 @@ struct System::Impl {
   TrackSurvival track_survival;                // the share of them the recent frames kept
   // both threads (StageTimings is thread-safe)
   StageTimings timings;
+  // made by the mapping thread after each frame, read by the tracking thread
+  std::mutex prior_mutex;
+  std::shared_ptr<const TrackPriorSource> prior_source;
+  void publishPriorSource(const FrameResult& result);
+  void clearPriorSource();
 };
 
 }  // namespace vitamin_e::pipeline

@@ -101,15 +101,26 @@ struct DenseTracker::Impl {
     return cfg.predict_parallax ? Eigen::Vector2f(parallax_scale * t.resid) : Eigen::Vector2f::Zero();
   }
 
+  // The caller's priors, per track (index as tracks): a track with from_prior
+  // set is predicted at prior_uv instead of by the flow.
+  std::vector<Eigen::Vector2f> prior_uv;
+  std::vector<std::uint8_t> has_prior, from_prior;
+  std::vector<int> retry;
+
   explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
 
-  void trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale);
+  // subset: the tracks to step (indices into tracks); null: all of them.
+  void trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale,
+                const std::vector<int>* subset = nullptr);
   float frameStrengthRatio(float scale);
   int detect(const cv::Mat& gray, float scale, std::vector<Track>* fresh);
-  void alignSteps();
+  void alignSteps(const std::vector<int>* subset = nullptr);
+  void matchPriors(const std::vector<TrackPrior>& priors);
+  void retryFromPriors(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale, bool align);
 };
 
-void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale) {
+void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale,
+                                  const std::vector<int>* subset) {
   const Eigen::Matrix2f Af = A.cast<float>();
   const Eigen::Vector2f bf = b.cast<float>();
   const Eigen::Matrix2d Ainv_d =
@@ -123,17 +134,19 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
   const float min_sharp = static_cast<float>(cfg.min_track_sharpness);
   const int stripes = cfg.threads > 1 ? cfg.threads * 4 : 1;
   steps.resize(tracks.size());
+  const int count = subset ? static_cast<int>(subset->size()) : static_cast<int>(tracks.size());
+  const auto index = [subset](int k) { return subset ? (*subset)[static_cast<size_t>(k)] : k; };
   // Forward: climb F from the flow prediction to a local maximum.
-  auto climb = [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) {
+  auto climb = [&](int k0, int k1) {
+    for (int k = k0; k < k1; ++k) {
+      const int i = index(k);
       const Track& t = tracks[i];
       Step& s = steps[i];
       s.ok = false;
       s.climbed = false;
       s.fail = kLossClimb;
       ClimbParams fwd{t.sign, static_cast<float>(cfg.lambda) * scale, sigma2, cfg.max_climb_steps, 2};
-      const Eigen::Vector2f r = parallaxOf(t);
-      const Eigen::Vector2f pred = Af * t.uv + bf + r;
+      const Eigen::Vector2f pred = from_prior[i] ? prior_uv[i] : Eigen::Vector2f(Af * t.uv + bf + parallaxOf(t));
       s.pred = pred;
       if (!hillClimb(kappa, pred, fwd, &s.px)) continue;
       if (cfg.polish_steps > 0) {
@@ -149,12 +162,12 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.climbed = true;
     }
   };
-  forStripes(static_cast<int>(tracks.size()), stripes, 257, climb);
+  forStripes(count, stripes, 257, climb);
   // The frame's strength change: an exposure step scales every peak alike (by
   // about the cube of the brightness ratio: kappa is cubic in intensity), which
   // the noise-dominated median |kappa| does not follow; each track is then
   // judged against that common change, not against 1.
-  strength_ratio = frameStrengthRatio(scale);
+  if (!subset) strength_ratio = frameStrengthRatio(scale);
   // Ordinary frames scatter by a few % about 1 (motion, blur): there the test
   // stays against 1, as before; it moves only on a real step.
   const float test_ratio =
@@ -176,8 +189,9 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
   const float floor_abs = static_cast<float>(cfg.min_abs_curvature);
   const float floor_min_log = -std::log(kMaxFloorDrop);
   exposure_step = exposure_now - exposure_log;
-  auto check = [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) {
+  auto check = [&](int k0, int k1) {
+    for (int k = k0; k < k1; ++k) {
+      const int i = index(k);
       const Track& t = tracks[i];
       Step& s = steps[i];
       if (!s.climbed) continue;
@@ -194,11 +208,12 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.fail = kLossFlat;
       if (min_sharp > 0.f && peakSharpness(kappa, s.px, t.sign) < min_sharp) continue;
       // Backward: climb the previous curvature from the inverse prediction.
-      const Eigen::Vector2f r = parallaxOf(t);
+      const Eigen::Vector2f back_pred =
+          from_prior[i] ? Eigen::Vector2f(s.uv - (s.pred - t.uv)) : Eigen::Vector2f(Ainv * (s.uv - bf - parallaxOf(t)));
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
       Eigen::Vector2i q;
       s.fail = kLossBackClimb;
-      if (!hillClimb(prev_kappa, Ainv * (s.uv - bf - r), bwd, &q)) continue;
+      if (!hillClimb(prev_kappa, back_pred, bwd, &q)) continue;
       if (cfg.polish_steps > 0) {
         const ClimbParams pol{t.sign, 0.f, 1.f, cfg.polish_steps, 2};
         if (!hillClimb(prev_kappa, q.cast<float>(), pol, &q)) continue;
@@ -210,7 +225,58 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       if (s.ok && blend > 0.f && (s.pred - s.uv).squaredNorm() < 1.f) s.uv += blend * (s.pred - s.uv);
     }
   };
-  forStripes(static_cast<int>(tracks.size()), stripes, 257, check);
+  forStripes(count, stripes, 257, check);
+}
+
+void DenseTracker::Impl::matchPriors(const std::vector<TrackPrior>& priors) {
+  const size_t n = tracks.size();
+  prior_uv.assign(n, Eigen::Vector2f::Zero());
+  has_prior.assign(n, 0);
+  from_prior.assign(n, 0);
+  if (priors.empty() || !cfg.retry_from_prior) return;
+  for (size_t i = 0; i < n; ++i) {
+    const auto it = std::lower_bound(priors.begin(), priors.end(), tracks[i].id,
+                                     [](const TrackPrior& p, std::uint64_t id) { return p.id < id; });
+    if (it == priors.end() || it->id != tracks[i].id || !it->uv.allFinite()) continue;
+    prior_uv[i] = it->uv;
+    has_prior[i] = 1;
+  }
+}
+
+// The tracks the flow's prediction lost get one more step from their prior
+// where that is elsewhere: after dropped frames one affine flow cannot predict
+// both a near and a far layer, a map point seen from the predicted pose can.
+// The step passes the same checks; the flow stays the frame's flow.
+void DenseTracker::Impl::retryFromPriors(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale, bool align) {
+  retry.clear();
+  // The predicted pose is off by the motion model's error (a turn that starts
+  // or ends): the map tracks the flow kept tell where their priors should have
+  // been; a robust affine from prior to position corrects the rest.
+  std::vector<Eigen::Vector2d> xs, ys;
+  for (size_t i = 0; i < tracks.size(); ++i) {
+    if (!steps[i].ok || !has_prior[i]) continue;
+    xs.push_back(prior_uv[i].cast<double>());
+    ys.push_back(steps[i].uv.cast<double>());
+  }
+  const AffineFitConfig fc{cfg.flow_sigma_start_px, 1.0, 3, std::max(cfg.flow_min_matches, 30)};
+  const AffineFit fix = fitAffineGemanMcClure(xs, ys, fc);
+  if (fix.ok) {
+    const Eigen::Matrix2f Af = fix.A.cast<float>();
+    const Eigen::Vector2f bf = fix.b.cast<float>();
+    for (size_t i = 0; i < tracks.size(); ++i) {
+      if (has_prior[i]) prior_uv[i] = Af * prior_uv[i] + bf;
+    }
+  }
+  // The band in which the affine fit counts its inliers (affine_flow.cpp).
+  const float min_d2 = static_cast<float>(std::pow(2.5 * cfg.flow_sigma_px, 2));
+  for (size_t i = 0; i < tracks.size(); ++i) {
+    if (steps[i].ok || !has_prior[i] || (prior_uv[i] - steps[i].pred).squaredNorm() <= min_d2) continue;
+    from_prior[i] = 1;
+    retry.push_back(static_cast<int>(i));
+  }
+  if (retry.empty()) return;
+  trackAll(A, b, scale, &retry);
+  if (align) alignSteps(&retry);
 }
 
 float DenseTracker::Impl::frameStrengthRatio(float scale) {
@@ -229,7 +295,7 @@ float DenseTracker::Impl::frameStrengthRatio(float scale) {
   return std::isfinite(*mid) && *mid > 0.f ? *mid : 1.f;
 }
 
-void DenseTracker::Impl::alignSteps() {
+void DenseTracker::Impl::alignSteps(const std::vector<int>* subset) {
   const float w = static_cast<float>(cfg.extremum_weight);
   // To confirm the climb, the patch alignment starts from the flow prediction,
   // not from the climbed extremum, so that it is an independent witness of where
@@ -243,23 +309,27 @@ void DenseTracker::Impl::alignSteps() {
       cfg.align_gain && std::fabs(exposure_step) > 3.f * std::log1p(static_cast<float>(cfg.align_gain_min_change));
   const PatchAlignParams ap{cfg.align_radius_px, cfg.align_iterations, 1.5f, fit_gain};
   const bool from_prediction = cfg.max_align_disagreement_px > 0.0;
-  auto work = [&](int i0, int i1) {
-    for (int i = i0; i < i1; ++i) {
+  const int count = subset ? static_cast<int>(subset->size()) : static_cast<int>(tracks.size());
+  const auto index = [subset](int k) { return subset ? (*subset)[static_cast<size_t>(k)] : k; };
+  auto work = [&](int k0, int k1) {
+    for (int k = k0; k < k1; ++k) {
+      const int i = index(k);
       Step& s = steps[i];
       if (!s.ok) continue;
       s.patch = from_prediction ? s.pred : s.ext;
       s.aligned = alignPatch(prev_smooth, smooth, tracks[i].uv, ap, &s.patch, &s.gain);
     }
   };
-  forStripes(static_cast<int>(tracks.size()), cfg.threads > 1 ? cfg.threads * 4 : 1, 257, work);
+  forStripes(count, cfg.threads > 1 ? cfg.threads * 4 : 1, 257, work);
   int candidates = 0, unaligned = 0;
   ratios.clear();
-  for (const Step& s : steps) {
+  for (int k = 0; k < count; ++k) {
+    const Step& s = steps[index(k)];
     candidates += s.ok;
     unaligned += s.ok && !s.aligned;
     if (s.ok && s.aligned) ratios.push_back(s.gain);
   }
-  if (!ratios.empty()) {
+  if (!subset && !ratios.empty()) {
     auto mid = ratios.begin() + static_cast<long>(ratios.size() / 2);
     std::nth_element(ratios.begin(), mid, ratios.end());
     patch_gain = *mid;
@@ -271,7 +341,8 @@ void DenseTracker::Impl::alignSteps() {
   const bool confirm =
       cfg.max_align_disagreement_px > 0.0 && unaligned <= cfg.confirm_max_unaligned_fraction * candidates;
   const float max_d2 = static_cast<float>(cfg.max_align_disagreement_px * cfg.max_align_disagreement_px);
-  for (Step& s : steps) {
+  for (int k = 0; k < count; ++k) {
+    Step& s = steps[index(k)];
     if (!s.ok) continue;
     if (confirm && (!s.aligned || (s.ext - s.patch).squaredNorm() > max_d2)) {
       s.ok = false;
@@ -374,7 +445,7 @@ std::size_t DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
   return before - tr.size();
 }
 
-TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
+TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const std::vector<TrackPrior>& priors) {
   if (gray.empty()) throw std::invalid_argument("DenseTracker::track: empty image");
   if (gray.type() != CV_8UC1) throw std::invalid_argument("DenseTracker::track: image must be CV_8UC1");
   Impl& m = *impl_;
@@ -452,6 +523,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
   m.patch_gain = 1.f;
   m.exposure_step = 0.f;
   if (m.has_prev && !m.tracks.empty() && scale > 0.f) {
+    m.matchPriors(priors);
     m.trackAll(A, b, scale);
     if (cfg.refine_flow) {
       // Refit the dominant flow to the tracked extrema (thousands of precise
@@ -476,7 +548,10 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp) {
         m.trackAll(A, b, scale);
       }
     }
-    if (align && !m.prev_smooth.empty() && m.prev_smooth.size() == m.smooth.size()) m.alignSteps();
+    const bool can_align = align && !m.prev_smooth.empty() && m.prev_smooth.size() == m.smooth.size();
+    if (can_align) m.alignSteps();
+    m.retryFromPriors(A, b, scale, can_align);
+    for (int i : m.retry) out.num_from_prior += m.steps[i].ok ? 1 : 0;
     // Two tracks on one pixel: keep the older one.
     for (size_t i = 0; i < m.tracks.size(); ++i) {
       if (!m.steps[i].ok) continue;

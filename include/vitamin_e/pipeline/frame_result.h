@@ -62,6 +62,7 @@ struct FrameDiagnostics {
   int tracks_born = 0;                 // new tracks detected
   int tracks_lost = 0;                 // tracks of the previous frame the tracker ended
   int tracks_dropped = 0;              // tracks of the previous frame the back end ended (outliers)
+  int tracks_from_prior = 0;           // of the tracked ones: found from the map's prior after the flow lost them
   std::map<std::string, int> lost_by;  // tracks_lost by the tracker's check (tracking::TrackerFrame::lost_by)
   // the map points the previous frame's tracks carried (when it was tracked)
   std::size_t prev_map_points = 0;

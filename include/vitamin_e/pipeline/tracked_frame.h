@@ -33,7 +33,8 @@ struct TrackedFrame {
   // frame, the ended ones by the check that ended them, and each ended track.
   int tracks_born = 0;
   int tracks_lost = 0;
-  int tracks_dropped = 0;  // tracks of the previous frame ended by the back end before this one was tracked
+  int tracks_dropped = 0;     // tracks of the previous frame ended by the back end before this one was tracked
+  int tracks_from_prior = 0;  // tracks found from the map's prior after the flow lost them
   std::map<std::string, int> lost_by;
   std::vector<std::pair<std::uint64_t, const char*>> ended;  // id, reason (static string)
   bool skipped = false;                                      // stamp did not increase: nothing tracked

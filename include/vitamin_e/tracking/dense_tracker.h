@@ -101,11 +101,23 @@ struct TrackerConfig {
                                                 // alignment fails for more than this fraction of the tracks (1 = never)
   bool refine_flow = true;       // refit A, b to the tracked points (GM, down to 1 px) and track again from it
   bool predict_parallax = true;  // add each point's last residual to the dominant flow (x_bar = A x + b + r)
+  // a track the flow's prediction lost is tracked once more from its prior (track()'s priors: where the caller's
+  // map and motion model put it), when the prior, corrected by the tracks the flow kept, lies outside the flow's
+  // inlier band (2.5 flow_sigma_px) of that prediction: a second layer that one affine flow cannot follow
+  // (experimental, off: docs/PERFORMANCE.md, "Dropped frames")
+  bool retry_from_prior = false;
   // --- execution ---
   int threads = 2;  // stripes run in parallel (cv::parallel_for_); 1 = serial (>= 1)
 
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
+};
+
+// Where the caller expects a track in the next frame (e.g. its map point seen
+// from the motion model's pose), in input image pixels.
+struct TrackPrior {
+  std::uint64_t id = 0;
+  Eigen::Vector2f uv = Eigen::Vector2f::Zero();
 };
 
 struct TrackedPoint {
@@ -124,6 +136,7 @@ struct TrackerFrame {
   bool flow_ok = false;  // the affine fit had >= flow_min_matches inliers
   int flow_matches = 0;  // BRIEF matches used by the fit (after cross-check/ratio)
   int num_tracked = 0, num_new = 0, num_lost = 0;
+  int num_from_prior = 0;  // of num_tracked: found from their prior after the flow's prediction lost them
   // num_lost by the check that ended the track: "climb" (no local maximum of F
   // near the prediction), "weak" (below min_track_curvature), "strength_change"
   // (max_curvature_ratio), "flat" (min_track_sharpness), "back_climb" and
@@ -154,7 +167,8 @@ class DenseTracker {
   // CV_8UC1 image of any size (>= 2*border_px+3 on each side); throws
   // std::invalid_argument on other types or an empty image. An image whose size
   // differs from the previous one restarts tracking (all points new).
-  TrackerFrame track(const cv::Mat& gray, double timestamp);
+  // priors: expected positions of some tracks in this frame, sorted by id (see retry_from_prior).
+  TrackerFrame track(const cv::Mat& gray, double timestamp, const std::vector<TrackPrior>& priors = {});
   // The back end removes outlier tracks: they are not tracked further and their
   // cells are refilled with new points on the next frame. Unknown ids are ignored.
   // Returns the number of tracks removed.
