@@ -101,11 +101,12 @@ struct DenseTracker::Impl {
     return cfg.predict_parallax ? Eigen::Vector2f(parallax_scale * t.resid) : Eigen::Vector2f::Zero();
   }
 
-  // The caller's priors, per track (index as tracks): a track with from_prior
-  // set is predicted at prior_uv instead of by the flow.
+  // The caller's priors, per track (index as tracks; empty when there are
+  // none): a track with from_prior set is predicted at prior_uv instead of by the flow.
   std::vector<Eigen::Vector2f> prior_uv;
   std::vector<std::uint8_t> has_prior, from_prior;
   std::vector<int> retry;
+  bool fromPrior(int i) const { return !from_prior.empty() && from_prior[static_cast<size_t>(i)]; }
 
   explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
 
@@ -146,7 +147,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       s.climbed = false;
       s.fail = kLossClimb;
       ClimbParams fwd{t.sign, static_cast<float>(cfg.lambda) * scale, sigma2, cfg.max_climb_steps, 2};
-      const Eigen::Vector2f pred = from_prior[i] ? prior_uv[i] : Eigen::Vector2f(Af * t.uv + bf + parallaxOf(t));
+      const Eigen::Vector2f pred = fromPrior(i) ? prior_uv[i] : Eigen::Vector2f(Af * t.uv + bf + parallaxOf(t));
       s.pred = pred;
       if (!hillClimb(kappa, pred, fwd, &s.px)) continue;
       if (cfg.polish_steps > 0) {
@@ -209,7 +210,7 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       if (min_sharp > 0.f && peakSharpness(kappa, s.px, t.sign) < min_sharp) continue;
       // Backward: climb the previous curvature from the inverse prediction.
       const Eigen::Vector2f back_pred =
-          from_prior[i] ? Eigen::Vector2f(s.uv - (s.pred - t.uv)) : Eigen::Vector2f(Ainv * (s.uv - bf - parallaxOf(t)));
+          fromPrior(i) ? Eigen::Vector2f(s.uv - (s.pred - t.uv)) : Eigen::Vector2f(Ainv * (s.uv - bf - parallaxOf(t)));
       ClimbParams bwd{t.sign, static_cast<float>(cfg.lambda) * prev_scale, sigma2, cfg.max_climb_steps, 2};
       Eigen::Vector2i q;
       s.fail = kLossBackClimb;
@@ -229,11 +230,16 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
 }
 
 void DenseTracker::Impl::matchPriors(const std::vector<TrackPrior>& priors) {
+  retry.clear();
+  from_prior.clear();
+  if (priors.empty() || !cfg.retry_from_prior) {
+    has_prior.clear();
+    return;
+  }
   const size_t n = tracks.size();
   prior_uv.assign(n, Eigen::Vector2f::Zero());
   has_prior.assign(n, 0);
   from_prior.assign(n, 0);
-  if (priors.empty() || !cfg.retry_from_prior) return;
   for (size_t i = 0; i < n; ++i) {
     const auto it = std::lower_bound(priors.begin(), priors.end(), tracks[i].id,
                                      [](const TrackPrior& p, std::uint64_t id) { return p.id < id; });
@@ -249,6 +255,10 @@ void DenseTracker::Impl::matchPriors(const std::vector<TrackPrior>& priors) {
 // The step passes the same checks; the flow stays the frame's flow.
 void DenseTracker::Impl::retryFromPriors(const Eigen::Matrix2d& A, const Eigen::Vector2d& b, float scale, bool align) {
   retry.clear();
+  if (has_prior.empty()) return;
+  bool any_lost = false;
+  for (size_t i = 0; i < tracks.size() && !any_lost; ++i) any_lost = has_prior[i] && !steps[i].ok;
+  if (!any_lost) return;
   // The predicted pose is off by the motion model's error (a turn that starts
   // or ends): the map tracks the flow kept tell where their priors should have
   // been; a robust affine from prior to position corrects the rest.
