@@ -25,15 +25,29 @@ void PinholeImage::validate() const {
 }
 
 std::vector<std::pair<int, int>> FrameMesh::edges() const {
-  std::vector<std::pair<int, int>> e;
-  e.reserve(triangles.size() * 3);
+  // Bucketed by the smaller end (a counting sort), each bucket (a vertex's few larger
+  // neighbours) sorted and deduplicated: the order of sorting all pairs, in linear time.
+  const int n = static_cast<int>(vertices.size());
+  std::vector<int> start(static_cast<std::size_t>(n) + 1, 0), larger(triangles.size() * 3);
   for (const auto& t : triangles)
-    for (int k = 0; k < 3; ++k) {
-      const int a = t[k], b = t[(k + 1) % 3];
-      e.emplace_back(std::min(a, b), std::max(a, b));
-    }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
+    for (int k = 0; k < 3; ++k) ++start[std::min(t[k], t[(k + 1) % 3]) + 1];
+  for (int i = 0; i < n; ++i) start[i + 1] += start[i];
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (const auto& t : triangles)
+      for (int k = 0; k < 3; ++k) {
+        const int a = t[k], b = t[(k + 1) % 3];
+        larger[fill[std::min(a, b)]++] = std::max(a, b);
+      }
+  }
+  std::vector<std::pair<int, int>> e;
+  e.reserve(triangles.size() * 3 / 2 + 3);
+  for (int a = 0; a < n; ++a) {
+    const auto first = larger.begin() + start[a], last = larger.begin() + start[a + 1];
+    std::sort(first, last);
+    for (auto it = first; it != last; ++it)
+      if (it == first || *it != *(it - 1)) e.emplace_back(a, *it);
+  }
   return e;
 }
 

@@ -7,7 +7,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "vitamin_e/common/lanes.h"
+
 namespace vitamin_e::meshing {
+
+using common::Lanes;
 
 namespace {
 void require(bool ok, const char* key, const std::string& what) {
@@ -16,8 +20,6 @@ void require(bool ok, const char* key, const std::string& what) {
 std::uint64_t edgeKey(std::uint64_t a, std::uint64_t b) {
   return (a * 0x9E3779B97F4A7C15ULL) ^ (b + 0x632BE59BD9B4E019ULL + (a << 6) + (a >> 2));
 }
-double softThreshold(double x, double t) { return x > t ? x - t : (x < -t ? x + t : 0.0); }
-double clamp1(double x) { return std::max(-1.0, std::min(1.0, x)); }
 }  // namespace
 
 void NltgvConfig::validate() const {
@@ -73,15 +75,15 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
     nx[i] = xy.x();
     ny[i] = xy.y();
     if (config_.warm_start) {
-      const auto it = prev_vertices_.find(V[i].id);
-      if (it != prev_vertices_.end() && !config_.warm_start_primal) {
+      const VertexState* prev = prev_vertices_.find(V[i].id);
+      if (prev && !config_.warm_start_primal) {
         ++stats.warm_started;
         continue;
       }
-      if (it != prev_vertices_.end()) {
-        xi[i] = z[i] * it->second.ratio;
-        wx[i] = it->second.wx * xi[i];
-        wy[i] = it->second.wy * xi[i];
+      if (prev) {
+        xi[i] = z[i] * prev->ratio;
+        wx[i] = prev->wx * xi[i];
+        wy[i] = prev->wy * xi[i];
         ++stats.warm_started;
       }
     }
@@ -129,96 +131,123 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
   };
   for (int i = 0; i < n; ++i)
     if (wx[i] == 0.0 && wy[i] == 0.0) wx[i] = gx[i], wy[i] = gy[i];  // cold start
-  std::vector<int> ei(m), ej(m);
-  std::vector<double> ae(m);
-  std::vector<double> dx(m), dy(m), p0(m, 0.0), p1(m, 0.0), p2(m, 0.0), s0(m);
+  // The iteration works on packed (xi, wx, wy, 0) vertex states and (p0, p1, p2, 0) edge duals
+  // in float: one 4-lane operation per edge and term instead of three scalar ones. The
+  // inverse depths are relative to their median (about 1), far from float's precision.
+  // Edges in rounds that share no vertex (a greedy edge colouring): consecutive edges then
+  // update different vertices, so the loop does not wait on its own last store.
+  std::vector<int> order(m);
+  {
+    std::vector<std::uint64_t> used(n, 0);  // colours taken at each vertex
+    std::vector<int> colour(m), count(65, 0);
+    for (int k = 0; k < m; ++k) {
+      const int u = undirected[k].first, v = undirected[k].second;
+      const std::uint64_t taken = used[u] | used[v];
+      const int c = taken == ~std::uint64_t{0} ? 64 : __builtin_ctzll(~taken);
+      if (c < 64) used[u] |= std::uint64_t{1} << c, used[v] |= std::uint64_t{1} << c;
+      colour[k] = c;
+      ++count[c];
+    }
+    std::vector<int> start(66, 0);
+    for (int c = 0; c < 65; ++c) start[c + 1] = start[c] + count[c];
+    for (int k = 0; k < m; ++k) order[start[colour[k]]++] = k;
+  }
+  struct Edge {
+    Lanes weights;  // (alpha_ij, beta, beta, 0): the duals' weights in K^T p
+    Lanes half_d;   // (0, dx / 2, dy / 2, 0): the mean gradient's lever
+    Lanes lever;    // (1, -dx / 2, -dy / 2, 0): first-order residual from (xi_i - xi_j, w_i + w_j)
+    Lanes step;     // dual steps: the first-order term's in lane 0, 1 / (2 beta) times beta in 1, 2
+    int i, j;
+  };
+  std::vector<Edge> edges(m);
+  std::vector<Lanes> dual(m, Lanes::all(0.0f));
   std::vector<double> tau_xi(n, 0.0), tau_wx(n, 0.0), tau_wy(n, 0.0);
+  const float fb = static_cast<float>(b);
   for (int k = 0; k < m; ++k) {
     // Orient every edge by track id so that warm-started duals keep their sign.
-    const auto& ue = undirected[k];
+    const auto& ue = undirected[order[k]];
     const bool flip = V[ue.first].id > V[ue.second].id;
     const int i = flip ? ue.second : ue.first;
     const int j = flip ? ue.first : ue.second;
-    ei[k] = i;
-    ej[k] = j;
-    dx[k] = nx[i] - nx[j];
-    dy[k] = ny[i] - ny[j];
-    ae[k] = support(i, j);
-    s0[k] = 1.0 / (ae[k] * (2.0 + std::abs(dx[k]) + std::abs(dy[k])));
-    tau_xi[i] += ae[k];
-    tau_xi[j] += ae[k];
-    tau_wx[i] += 0.5 * ae[k] * std::abs(dx[k]) + b;
-    tau_wy[i] += 0.5 * ae[k] * std::abs(dy[k]) + b;
-    tau_wx[j] += 0.5 * ae[k] * std::abs(dx[k]) + b;
-    tau_wy[j] += 0.5 * ae[k] * std::abs(dy[k]) + b;
+    const double dx = nx[i] - nx[j], dy = ny[i] - ny[j];
+    const double w = support(i, j);
+    const float hx = static_cast<float>(0.5 * dx), hy = static_cast<float>(0.5 * dy);
+    Edge& e = edges[k];
+    e.i = i;
+    e.j = j;
+    e.weights = Lanes::of(static_cast<float>(w), fb, fb, 0.0f);
+    e.half_d = Lanes::of(0.0f, hx, hy, 0.0f);
+    e.lever = Lanes::of(1.0f, -hx, -hy, 0.0f);
+    e.step = Lanes::of(static_cast<float>(1.0 / (2.0 + std::abs(dx) + std::abs(dy))), 0.5f, 0.5f, 0.0f);
+    tau_xi[i] += w;
+    tau_xi[j] += w;
+    tau_wx[i] += 0.5 * w * std::abs(dx) + b;
+    tau_wy[i] += 0.5 * w * std::abs(dy) + b;
+    tau_wx[j] += 0.5 * w * std::abs(dx) + b;
+    tau_wy[j] += 0.5 * w * std::abs(dy) + b;
     if (config_.warm_start && !prev_duals_.empty()) {
-      const auto it = prev_duals_.find(edgeKey(V[i].id, V[j].id));
-      if (it != prev_duals_.end()) {
-        p0[k] = it->second.x();
-        p1[k] = it->second.y();
-        p2[k] = it->second.z();
-      }
+      if (const Eigen::Vector3f* p = prev_duals_.find(edgeKey(V[i].id, V[j].id)))
+        dual[k] = Lanes::of(p->x(), p->y(), p->z(), 0.0f);
     }
   }
+  const auto inverse = [](double t) { return static_cast<float>(t > 0.0 ? 1.0 / t : 0.0); };
+  // The data term acts on xi only: its measurement and threshold sit in lane 0, and zeros in the
+  // other lanes leave the gradients to the plain descent step.
+  std::vector<Lanes> x(n), tau(n), bar(n), grad(n), data(n), threshold(n);
   for (int i = 0; i < n; ++i) {
-    tau_xi[i] = tau_xi[i] > 0.0 ? 1.0 / tau_xi[i] : 0.0;
-    tau_wx[i] = tau_wx[i] > 0.0 ? 1.0 / tau_wx[i] : 0.0;
-    tau_wy[i] = tau_wy[i] > 0.0 ? 1.0 / tau_wy[i] : 0.0;
+    x[i] = Lanes::of(static_cast<float>(xi[i]), static_cast<float>(wx[i]), static_cast<float>(wy[i]), 0.0f);
+    tau[i] = Lanes::of(inverse(tau_xi[i]), inverse(tau_wx[i]), inverse(tau_wy[i]), 0.0f);
+    data[i] = Lanes::of(static_cast<float>(z[i]), 0.0f, 0.0f, 0.0f);
+    threshold[i] = Lanes::of(inverse(tau_xi[i]) * static_cast<float>(lam), 0.0f, 0.0f, 0.0f);
   }
-  const double s12 = 1.0 / (2.0 * b);
+  const Lanes one = Lanes::all(1.0f);
+  const Lanes theta = Lanes::all(static_cast<float>(config_.theta));
   const bool warm = stats.warm_started * 2 > static_cast<std::size_t>(n);
   stats.iterations = warm ? config_.warm_iterations : config_.iterations;
 
-  std::vector<double> bxi = xi, bwx = wx, bwy = wy;
-  std::vector<double> gxi(n), gwx(n), gwy(n);
+  bar = x;
   for (int it = 0; it < stats.iterations; ++it) {
-    // Dual ascent + projection onto the unit box; accumulate K^T p on the fly.
-    std::fill(gxi.begin(), gxi.end(), 0.0);
-    std::fill(gwx.begin(), gwx.end(), 0.0);
-    std::fill(gwy.begin(), gwy.end(), 0.0);
+    std::fill(grad.begin(), grad.end(), Lanes::all(0.0f));
+    // Dual ascent + projection onto the unit box; K^T p accumulated on the fly.
     for (int k = 0; k < m; ++k) {
-      const int i = ei[k], j = ej[k];
-      const double a = ae[k];
-      const double r0 = a * (bxi[i] - bxi[j] - 0.5 * ((bwx[i] + bwx[j]) * dx[k] + (bwy[i] + bwy[j]) * dy[k]));
-      const double q0 = clamp1(p0[k] + s0[k] * r0);
-      const double q1 = clamp1(p1[k] + s12 * b * (bwx[i] - bwx[j]));
-      const double q2 = clamp1(p2[k] + s12 * b * (bwy[i] - bwy[j]));
-      p0[k] = q0;
-      p1[k] = q1;
-      p2[k] = q2;
-      gxi[i] += a * q0;
-      gxi[j] -= a * q0;
-      const double hx = 0.5 * a * q0 * dx[k], hy = 0.5 * a * q0 * dy[k];
-      gwx[i] += b * q1 - hx;
-      gwy[i] += b * q2 - hy;
-      gwx[j] -= b * q1 + hx;
-      gwy[j] -= b * q2 + hy;
+      const Edge& e = edges[k];
+      const Lanes bi = bar[e.i], bj = bar[e.j];
+      const Lanes diff = bi - bj;
+      // (xi_i - xi_j, w_i + w_j) . lever: the first-order residual, in every lane.
+      const Lanes r0 = ((bi + bj).withFirst(diff) * e.lever).sumInAll();
+      const Lanes q = (dual[k] + diff.withFirst(r0) * e.step).clamp(one);
+      dual[k] = q;
+      const Lanes weighted = q * e.weights;
+      const Lanes lever_term = weighted.broadcastFirst() * e.half_d;
+      grad[e.i] += weighted - lever_term;
+      grad[e.j] -= weighted + lever_term;
     }
-    // Primal descent, prox of the L1 data term, over-relaxation.
+    // Primal descent, prox of the L1 data term (soft threshold towards the data), over-relaxation.
     for (int i = 0; i < n; ++i) {
-      const double x_old = xi[i], wx_old = wx[i], wy_old = wy[i];
-      const double x_hat = xi[i] - tau_xi[i] * gxi[i];
-      xi[i] = z[i] + softThreshold(x_hat - z[i], tau_xi[i] * lam);
-      wx[i] -= tau_wx[i] * gwx[i];
-      wy[i] -= tau_wy[i] * gwy[i];
-      bxi[i] = xi[i] + config_.theta * (xi[i] - x_old);
-      bwx[i] = wx[i] + config_.theta * (wx[i] - wx_old);
-      bwy[i] = wy[i] + config_.theta * (wy[i] - wy_old);
+      const Lanes x_old = x[i];
+      const Lanes x_hat = x_old - tau[i] * grad[i];
+      const Lanes x_new = x_hat - (x_hat - data[i]).clamp(threshold[i]);
+      x[i] = x_new;
+      bar[i] = x_new + theta * (x_new - x_old);
     }
+  }
+  for (int i = 0; i < n; ++i) {
+    xi[i] = x[i][0];
+    wx[i] = x[i][1];
+    wy[i] = x[i][2];
   }
 
   for (int i = 0; i < n; ++i)
     if (xi[i] > 0.0 && std::isfinite(xi[i])) V[i].inv_depth = xi[i] * unit;
   if (config_.warm_start) {
-    prev_vertices_.clear();
-    prev_vertices_.reserve(n);
+    prev_vertices_.reset(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) {
       if (!(xi[i] > 0.0) || !(z[i] > 0.0)) continue;
-      prev_vertices_[V[i].id] = {xi[i] / z[i], wx[i] / xi[i], wy[i] / xi[i]};
+      prev_vertices_.set(V[i].id, {xi[i] / z[i], wx[i] / xi[i], wy[i] / xi[i]});
     }
-    prev_duals_.clear();
-    prev_duals_.reserve(m);
-    for (int k = 0; k < m; ++k) prev_duals_[edgeKey(V[ei[k]].id, V[ej[k]].id)] = {p0[k], p1[k], p2[k]};
+    prev_duals_.reset(static_cast<std::size_t>(m));
+    for (int k = 0; k < m; ++k)
+      prev_duals_.set(edgeKey(V[edges[k].i].id, V[edges[k].j].id), Eigen::Vector3f(dual[k][0], dual[k][1], dual[k][2]));
   }
   return stats;
 }

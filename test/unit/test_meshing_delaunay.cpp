@@ -67,6 +67,27 @@ TEST(Delaunay, RandomPointsAreDelaunayWithEulerCount) {
   }
 }
 
+TEST(FrameMesh, EdgesAreEveryTrianglesSidesSortedOnce) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(0.0, 640.0);
+  std::vector<Vector2d> p(500);
+  for (auto& q : p) q = {U(rng), U(rng) * 0.75};
+  FrameMesh mesh;
+  mesh.vertices.resize(p.size() + 1);  // the last vertex is in no triangle
+  mesh.triangles = delaunayTriangulate(p);
+  std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), rng);
+  std::vector<std::pair<int, int>> expected;
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) expected.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
+  std::sort(expected.begin(), expected.end());
+  expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+  const int h = hullBoundaryCount(p);
+  // Euler: a triangulation of n points with h on the hull has 3n - 3 - h edges.
+  EXPECT_EQ(static_cast<int>(expected.size()), 3 * 500 - 3 - h);
+  EXPECT_EQ(mesh.edges(), expected);
+  EXPECT_TRUE(FrameMesh{}.edges().empty());
+}
+
 TEST(Delaunay, RegularGridCocircularPoints) {
   std::vector<Vector2d> p;
   const int W = 20, H = 13;

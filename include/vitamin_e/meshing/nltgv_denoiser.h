@@ -20,9 +20,9 @@
 // the previous relative correction xi/z and gradient (the camera moved, so the
 // previous inverse depths themselves are not reusable).
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
+#include "vitamin_e/common/id_map.h"
 #include "vitamin_e/meshing/frame_mesh.h"
 
 namespace vitamin_e::meshing {
@@ -63,8 +63,8 @@ class NltgvDenoiser {
     double wx, wy;
   };
   NltgvConfig config_;
-  std::unordered_map<std::uint64_t, VertexState> prev_vertices_;
-  std::unordered_map<std::uint64_t, Eigen::Vector3d> prev_duals_;  // key: hash of (id_i, id_j)
+  common::IdMap<VertexState> prev_vertices_;
+  common::IdMap<Eigen::Vector3f> prev_duals_;  // key: hash of (id_i, id_j)
 };
 
 }  // namespace vitamin_e::meshing
