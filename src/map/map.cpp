@@ -13,6 +13,7 @@ void MapConfig::validate() const {
   if (!(anchor_loss_share >= 0.0 && anchor_loss_share <= 1.0)) {
     throw std::invalid_argument("map.anchor_loss_share must be in [0, 1]");
   }
+  if (retire_oldest_beyond_frames < 0) throw std::invalid_argument("map.retire_oldest_beyond_frames must be >= 0");
   if (!(archive_voxel_m >= 0.0)) throw std::invalid_argument("map.archive_voxel_m must be >= 0");
   if (min_observations_to_archive < 1) throw std::invalid_argument("map.min_observations_to_archive must be >= 1");
   if (max_archive_points < 2) throw std::invalid_argument("map.max_archive_points must be >= 2");
@@ -150,6 +151,10 @@ std::size_t Map::keyframeToRetire() const {
   const int n = static_cast<int>(keyframes_.size());
   const int candidates = n - config_.keep_newest_keyframes;
   if (!config_.retire_least_parallax || candidates <= 1) return 0;
+  if (config_.retire_oldest_beyond_frames > 0 && keyframes_.back().frame_index - keyframes_.front().frame_index >
+                                                     static_cast<std::uint64_t>(config_.retire_oldest_beyond_frames)) {
+    return 0;
+  }
   std::unordered_map<std::uint64_t, int> index_of;
   for (int k = 0; k < n; ++k) index_of.emplace(keyframes_[static_cast<std::size_t>(k)].frame_index, k);
   // Per keyframe, the parallax the points of the newest keyframe would lose without it:

@@ -192,6 +192,9 @@ std::vector<Field> configTable(SystemConfig& c) {
         "angle without it; then the cheapest leaves");
   t.key("anchor_loss_share", &m.anchor_loss_share,
         "experimental, for retire_oldest_unless_anchor: the share of the angle, in [0, 1]");
+  t.key("retire_oldest_beyond_frames", &m.retire_oldest_beyond_frames,
+        "experimental, with retire_least_parallax: the oldest keyframe leaves whenever the window spans more "
+        "than this many frames (0: never)");
   t.key("archive_voxel_m", &m.archive_voxel_m,
         "retired points archived: 0 = all, else one per voxel of this size (map units)");
   t.key("max_archive_points", &m.max_archive_points,

@@ -283,6 +283,37 @@ TEST(Map, ATurnRetiresACrowdedKeyframeNotTheWideOne) {
   EXPECT_EQ(f[4], 7u);
 }
 
+TEST(Map, BeyondTheFrameSpanTheOldestLeavesEvenWhenItIsTheWideOne) {
+  // The turn above, but keyframe 0 is 100 frames old: with the span limited to 50 frames the
+  // oldest leaves as it would without the parallax rule; the crowded keyframes go after that.
+  MapConfig cfg;
+  cfg.max_keyframes = 5;
+  cfg.retire_oldest_beyond_frames = 50;
+  Map map(cfg);
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> points;
+  points.reserve(40);
+  for (std::uint64_t i = 0; i < 40; ++i) {
+    points.emplace_back(i, Eigen::Vector3d(-2.0 + 0.1 * double(i), 0.5 * double(i % 3) - 0.5, 8.0));
+  }
+  for (const auto& p : points) map.addLandmark(newLandmark(p.first, p.second, 1));
+  map.addKeyframe(keyframeObserving(0, Eigen::Vector3d(0, 0, 0), points));
+  map.addKeyframe(keyframeObserving(100, Eigen::Vector3d(1, 0, 0), points));
+  for (std::uint64_t k = 101; k < 107; ++k) {
+    map.addKeyframe(keyframeObserving(k, Eigen::Vector3d(1.0 + 0.02 * double(k - 100), 0, 0), points));
+  }
+  const std::vector<std::uint64_t> f = windowFrames(map);
+  ASSERT_EQ(f.size(), 5u);
+  EXPECT_EQ(f[0], 100u);  // frame 0 left at once: the window spanned more than 50 frames
+  EXPECT_EQ(f[4], 106u);
+  EXPECT_THROW(
+      [] {
+        MapConfig bad;
+        bad.retire_oldest_beyond_frames = -1;
+        bad.validate();
+      }(),
+      std::invalid_argument);
+}
+
 TEST(Map, AtSpeedTheKeyframesThatSeeNoCurrentPointLeaveFirst) {
   // Driving fast and slowing down: the gaps between keyframes shrink from 8 m to 1 m,
   // and each point is seen only from the keyframes of the last few metres. The old,

@@ -99,8 +99,12 @@ struct MapConfig {
   // render but is oldest-first on KITTI (docs/ROBUSTNESS.md).
   bool retire_oldest_unless_anchor = false;
   double anchor_loss_share = 0.5;  // in [0, 1]
-  int keep_newest_keyframes = 3;   // >= 1
-  double archive_voxel_m = 0.0;    // 0: archive every retired landmark; >0: one per voxel (map units)
+  // Experimental, with retire_least_parallax: the oldest keyframe leaves whenever the window spans
+  // more than this many frames (0: never). Tests whether a drone's window suffers from keyframes
+  // kept too long for their baselines (docs/ROBUSTNESS.md); the count depends on the frame rate.
+  int retire_oldest_beyond_frames = 0;  // >= 0
+  int keep_newest_keyframes = 3;        // >= 1
+  double archive_voxel_m = 0.0;         // 0: archive every retired landmark; >0: one per voxel (map units)
   // Cap on archived points (~70 B each with the voxel index). Reaching it
   // doubles the voxel (from 1/2048 of the archive's extent when it was 0) and
   // re-thins the archive to at most half the cap.
