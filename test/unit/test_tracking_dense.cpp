@@ -569,6 +569,44 @@ TEST(Brief, DistanceUnchangedByBrightnessOffset) {
   EXPECT_FALSE(brief.describe(base, 3, 50, &d));
 }
 
+TEST(Brief, SameBitsForEveryLayoutOfTheImage) {
+  // The tests read the patch through the image's row stride: an 8-bit image and its float copy,
+  // a window of a larger image (rows longer than the window) and the image turned by 180
+  // degrees (described by the turned pattern) all give the same descriptor.
+  const int w = 120, h = 100;
+  const cv::Mat img =
+      renderBlobs(randomBlobs(400, w, h, 6), w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero());
+  cv::Mat img8;
+  img.convertTo(img8, CV_8U);
+  cv::Mat img32;
+  img8.convertTo(img32, CV_32F);
+  cv::Mat padded(h + 10, w + 37, CV_8UC1, cv::Scalar(0));
+  img8.copyTo(padded(cv::Rect(5, 3, w, h)));
+  const cv::Mat window = padded(cv::Rect(5, 3, w, h));
+  ASSERT_FALSE(window.isContinuous());
+  cv::Mat turned;
+  cv::rotate(img8, turned, cv::ROTATE_180);
+  const vt::BriefExtractor brief(15), brief_turned = brief.rotated(2);
+  int described = 0;
+  for (int y = 8; y < h - 8; y += 7) {
+    for (int x = 8; x < w - 8; x += 9) {
+      vt::BriefDescriptor a, b, c, d;
+      ASSERT_TRUE(brief.describe(img8, x, y, &a));
+      ASSERT_TRUE(brief.describe(img32, x, y, &b));
+      ASSERT_TRUE(brief.describe(window, x, y, &c));
+      ASSERT_TRUE(brief_turned.describe(turned, w - 1 - x, h - 1 - y, &d));
+      EXPECT_EQ(a.bits, b.bits);
+      EXPECT_EQ(a.bits, c.bits);
+      EXPECT_EQ(a.bits, d.bits);
+      described += a.bits != vt::BriefDescriptor{}.bits;
+    }
+  }
+  EXPECT_GT(described, 50);  // textured patches, not all-zero descriptors
+  vt::BriefDescriptor flat;
+  ASSERT_TRUE(brief.describe(cv::Mat(h, w, CV_8UC1, cv::Scalar(90)), 50, 50, &flat));
+  EXPECT_EQ(flat.bits, vt::BriefDescriptor{}.bits);  // no test is "less" on a constant patch
+}
+
 TEST(DenseTracker, BlackAndConstantImagesGiveNoFeatures) {
   vt::DenseTracker tracker;
   for (int v : {0, 0, 128, 255, 0}) {
