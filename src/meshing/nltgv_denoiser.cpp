@@ -206,8 +206,8 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
   stats.iterations = warm ? config_.warm_iterations : config_.iterations;
 
   bar = x;
+  std::fill(grad.begin(), grad.end(), Lanes::all(0.0f));  // the primal step zeroes it after use
   for (int it = 0; it < stats.iterations; ++it) {
-    std::fill(grad.begin(), grad.end(), Lanes::all(0.0f));
     // Dual ascent + projection onto the unit box; K^T p accumulated on the fly.
     for (int k = 0; k < m; ++k) {
       const Edge& e = edges[k];
@@ -226,6 +226,7 @@ NltgvStats NltgvDenoiser::denoise(FrameMesh* mesh, const camera::Pinhole& K) {
     for (int i = 0; i < n; ++i) {
       const Lanes x_old = x[i];
       const Lanes x_hat = x_old - tau[i] * grad[i];
+      grad[i] = Lanes::all(0.0f);
       const Lanes x_new = x_hat - (x_hat - data[i]).clamp(threshold[i]);
       x[i] = x_new;
       bar[i] = x_new + theta * (x_new - x_old);
