@@ -256,14 +256,10 @@ Keyframe keyframeObserving(std::uint64_t frame, const Eigen::Vector3d& c,
   }
   return kf;
 }
-}  // namespace
 
-TEST(Map, ATurnRetiresACrowdedKeyframeNotTheWideOne) {
-  // Keyframes 1 m apart, then a turn that makes a keyframe every 2 cm: every keyframe
-  // sees the same points ahead. The oldest keyframe gives them their widest parallax;
-  // a crowded one between its neighbours gives them nothing the others do not.
-  MapConfig cfg;
-  cfg.max_keyframes = 5;
+// The window after a turn: keyframes of frames 0 and turn_start 1 m apart, then six keyframes
+// 2 cm apart (frames turn_start + 1 ...), every one seeing the same 40 points ahead.
+std::vector<std::uint64_t> windowAfterTurn(const MapConfig& cfg, std::uint64_t turn_start) {
   Map map(cfg);
   std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> points;
   points.reserve(40);
@@ -272,11 +268,20 @@ TEST(Map, ATurnRetiresACrowdedKeyframeNotTheWideOne) {
   }
   for (const auto& p : points) map.addLandmark(newLandmark(p.first, p.second, 1));
   map.addKeyframe(keyframeObserving(0, Eigen::Vector3d(0, 0, 0), points));
-  map.addKeyframe(keyframeObserving(1, Eigen::Vector3d(1, 0, 0), points));
-  for (std::uint64_t k = 2; k < 8; ++k) {
-    map.addKeyframe(keyframeObserving(k, Eigen::Vector3d(1.0 + 0.02 * double(k - 1), 0, 0), points));
+  map.addKeyframe(keyframeObserving(turn_start, Eigen::Vector3d(1, 0, 0), points));
+  for (std::uint64_t k = turn_start + 1; k < turn_start + 7; ++k) {
+    map.addKeyframe(keyframeObserving(k, Eigen::Vector3d(1.0 + 0.02 * double(k - turn_start), 0, 0), points));
   }
-  const std::vector<std::uint64_t> f = windowFrames(map);
+  return windowFrames(map);
+}
+}  // namespace
+
+TEST(Map, ATurnRetiresACrowdedKeyframeNotTheWideOne) {
+  // The oldest keyframe gives the points their widest parallax; a crowded one between its
+  // neighbours gives them nothing the others do not.
+  MapConfig cfg;
+  cfg.max_keyframes = 5;
+  const std::vector<std::uint64_t> f = windowAfterTurn(cfg, 1);
   ASSERT_EQ(f.size(), 5u);
   EXPECT_EQ(f[0], 0u);  // the wide baseline stays (retiring the oldest would have dropped it first)
   EXPECT_EQ(f[2], 5u);  // the newest three are kept
@@ -289,22 +294,12 @@ TEST(Map, BeyondTheFrameSpanTheOldestLeavesEvenWhenItIsTheWideOne) {
   MapConfig cfg;
   cfg.max_keyframes = 5;
   cfg.retire_oldest_beyond_frames = 50;
-  Map map(cfg);
-  std::vector<std::pair<std::uint64_t, Eigen::Vector3d>> points;
-  points.reserve(40);
-  for (std::uint64_t i = 0; i < 40; ++i) {
-    points.emplace_back(i, Eigen::Vector3d(-2.0 + 0.1 * double(i), 0.5 * double(i % 3) - 0.5, 8.0));
-  }
-  for (const auto& p : points) map.addLandmark(newLandmark(p.first, p.second, 1));
-  map.addKeyframe(keyframeObserving(0, Eigen::Vector3d(0, 0, 0), points));
-  map.addKeyframe(keyframeObserving(100, Eigen::Vector3d(1, 0, 0), points));
-  for (std::uint64_t k = 101; k < 107; ++k) {
-    map.addKeyframe(keyframeObserving(k, Eigen::Vector3d(1.0 + 0.02 * double(k - 100), 0, 0), points));
-  }
-  const std::vector<std::uint64_t> f = windowFrames(map);
+  const std::vector<std::uint64_t> f = windowAfterTurn(cfg, 100);
   ASSERT_EQ(f.size(), 5u);
   EXPECT_EQ(f[0], 100u);  // frame 0 left at once: the window spanned more than 50 frames
   EXPECT_EQ(f[4], 106u);
+  cfg.retire_oldest_beyond_frames = 0;
+  EXPECT_EQ(windowAfterTurn(cfg, 100)[0], 0u);  // without the limit the wide baseline stays
   EXPECT_THROW(
       [] {
         MapConfig bad;
