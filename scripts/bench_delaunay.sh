@@ -5,5 +5,6 @@
 # Last line of the output: JSON summary.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 bin="$(ve_bench_bin bench_meshing_delaunay)"
 exec "$bin" "$@"

@@ -17,7 +17,7 @@
 # and after, and a JSON line with every number. Timing only: never part of the tests.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-if ve_wants_help "$@"; then sed -n '2,17p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0; fi
+ve_help_on_request "$@"
 [ "${VE_NO_BUILD:-0}" = 1 ] || "$VE_ROOT/scripts/build.sh" >&2
 ve_ros_env
 exec /usr/bin/python3 "$VE_ROOT/scripts/bench_live.py" --default-render "$(ve_list_path ../renders/V1_01_easy_30s)" \

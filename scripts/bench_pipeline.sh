@@ -22,7 +22,7 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 usage="usage: ./scripts/bench_pipeline.sh [--base DIR] [--runs N] [--frames N] [--stride N] [--out DIR] [--render PATH] [--kitti PATH] [--only render|kitti] [--modes LIST] [--config-dir DIR]"
-if ve_wants_help "$@"; then sed -n '2,21p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0; fi
+ve_help_on_request "$@"
 
 base="" runs=2 frames=0 stride=1 only="" modes="sequential pipelined" config_dir="$VE_ROOT/config"
 out="$(mktemp -d /tmp/ve_bench_pipeline.XXXXXX)"

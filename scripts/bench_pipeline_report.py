@@ -59,6 +59,11 @@ def median_map(runs, key):
 
 
 def main():
+    if len(sys.argv) != 6 or not sys.argv[2].isdigit():
+        if any(a in ("-h", "--help") for a in sys.argv[1:]):
+            sys.stdout.write(__doc__)
+            return
+        sys.exit(__doc__)
     out, nruns, builds, modes, sets = sys.argv[1], int(sys.argv[2]), sys.argv[3].split(), sys.argv[4].split(), sys.argv[5].split()
     result = {"runs": nruns, "load": open("/proc/loadavg").read().split()[:3], "cores": os.cpu_count(), "sets": {}}
     lines = []

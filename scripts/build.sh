@@ -5,6 +5,7 @@
 # --sanitize builds with ASan+UBSan in .ws_sanitize/ instead.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 
 sanitize=OFF
 tests=0

@@ -13,7 +13,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 cd "$VE_ROOT"
 
 case "${1:-}" in
-  -h|--help) sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+  -h|--help) ve_print_header; exit 0 ;;
 esac
 [ $# -le 1 ] || ve_die "usage: check_style.sh [BASE]"
 command -v clang-format >/dev/null || ve_die "clang-format is not installed (./scripts/setup.sh installs it)"

@@ -49,6 +49,21 @@ ve_wants_help() {
   for a in "$@"; do case "$a" in -h|--help) return 0 ;; esac; done
   return 1
 }
+# The calling script's header comment (the lines after the shebang that start with '#'): its usage.
+ve_print_header() {
+  awk 'NR == 1 && /^#!/ { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"
+}
+# With -h or --help among the script's own arguments (those before a '--', which may be passed
+# on to another tool), prints the header and exits 0; a script calls it before it acts.
+ve_help_on_request() {
+  local a
+  for a in "$@"; do
+    case "$a" in
+      --) return 0 ;;
+      -h|--help) ve_print_header; exit 0 ;;
+    esac
+  done
+}
 # Provenance of an evaluation run, read by ./scripts/results.sh: OUT/run_info.txt gets the
 # command (with the data roots), commit, machine, start time and load; ..._end adds the end.
 #   ve_suite_info_begin OUT COMMAND ARGS...    ve_suite_info_end OUT

@@ -18,7 +18,7 @@ while [ $# -gt 0 ]; do
     --frames) [ $# -ge 2 ] || ve_die "--frames needs a number"; frames="$2"; shift ;;
     --seed) [ $# -ge 2 ] || ve_die "--seed needs a number"; seed="$2"; shift ;;
     --fresh) fresh=1 ;;
-    -h | --help) sed -n '2,7p' "$0"; exit 0 ;;
+    -h | --help) ve_print_header; exit 0 ;;
     *) ve_die "demo.sh: unknown option '$1' (--frames N, --seed S, --fresh)" ;;
   esac
   shift

@@ -8,6 +8,7 @@
 # passed through. The last line printed is the JSON result.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 
 [ $# -ge 2 ] || ve_die "usage: ./scripts/evaluate.sh TRAJECTORY GROUNDTRUTH [--frames N] [--plot OUT.png] [flags...]"
 traj="$1"; gt="$2"; shift 2

@@ -17,7 +17,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 usage="usage: ./scripts/evaluate_map_reuse.sh LIST [--out DIR] [-- run_dataset.sh flags...]"
 [ $# -ge 1 ] || ve_die "$usage"
-case "$1" in -h | --help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;; esac
+ve_help_on_request "$@"
 list="$1"; shift
 out="$VE_ROOT/out/map_reuse"
 run_flags=()

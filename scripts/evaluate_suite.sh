@@ -20,6 +20,7 @@
 # relocalizations = losses recovered in the existing map; peak RSS of the whole run.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 
 [ $# -ge 1 ] || ve_die "usage: ./scripts/evaluate_suite.sh LIST [--out DIR] [-- run_dataset.sh flags...]"
 list="$1"; shift

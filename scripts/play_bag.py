@@ -18,6 +18,10 @@ import sys
 import threading
 import time
 
+if __name__ == "__main__" and any(a in ("-h", "--help") for a in sys.argv[1:]):
+    sys.stdout.write(__doc__)  # before the ROS imports: the usage needs no workspace
+    sys.exit(0)
+
 import rosbag
 import rospy
 from vitamin_e.msg import TrackingStatus

@@ -11,7 +11,7 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 usage="usage: ./scripts/profile.sh DATASET [--config YAML] [--frames N] [--stride N] [--bin DIR] [--out DIR] [--top N]"
-if ve_wants_help "$@"; then sed -n '2,11p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0; fi
+ve_help_on_request "$@"
 [ $# -ge 1 ] || ve_die "$usage"
 dataset="$1"; shift
 config="" frames=40 stride=1 bin="" top=25

@@ -11,9 +11,11 @@
 # image folders under shared/data. A sequence already rendered is kept.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 
 [ $# -ge 1 ] || ve_die "usage: ./scripts/render_euroc_suite.sh OUT_DIR [--full | --duration-s S --start-s S] [--shared DIR] [--only NAME]"
 out="$1"; shift
+case "$out" in -*) ve_die "render_euroc_suite.sh: OUT_DIR comes first, got '$out' (--help for the usage)" ;; esac
 duration=20
 start=10
 shared="$VE_ROOT/../shared"

@@ -25,7 +25,7 @@ orig_args=("$@")
 need_value() { [ $# -ge 2 ] && [ -n "$2" ] && [ "${2#-}" = "$2" ]; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    -h | --help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
+    -h | --help) ve_print_header; exit 0 ;;
     --out) need_value "$@" || ve_die "--out needs a folder"; out="$2"; shift ;;
     --from) need_value "$@" || ve_die "--from needs a folder"; from="$2"; shift ;;
     --suites) need_value "$@" || ve_die "--suites needs a comma-separated list"; suites="$2"; shift ;;

@@ -4,6 +4,8 @@
 #   ./scripts/ros.sh roslaunch vitamin_e euroc.launch bag:=FILE
 set -eo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+# Only the first argument: the rest belongs to the ROS command (rostopic --help).
+ve_help_on_request "${1:-}"
 [ $# -ge 1 ] || ve_die "usage: ./scripts/ros.sh CMD [ARGS...]"
 if [ ! -f "$VE_WS/devel/setup.bash" ]; then
   "$VE_ROOT/scripts/build.sh" >&2

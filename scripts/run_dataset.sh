@@ -11,10 +11,7 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 usage="usage: ./scripts/run_dataset.sh DATASET OUT_DIR [--config YAML] [--calib FILE] [--topic T] [--max-frames N] [--start-frame N] [--quiet]"
-if [ $# -ge 1 ] && { [ "$1" = -h ] || [ "$1" = --help ]; }; then
-  echo "$usage"
-  exit 0
-fi
+ve_help_on_request "$@"
 [ $# -ge 2 ] || ve_die "$usage"
 dataset="$1"
 out="$2"

@@ -7,6 +7,7 @@
 # running master ($ROS_MASTER_URI), e.g. a euroc.launch started beforehand.
 set -eo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 
 out=""
 bag=""

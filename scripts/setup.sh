@@ -3,6 +3,7 @@
 # Idempotent; needs root (or sudo) only when something is missing.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 
 PACKAGES=(
   build-essential cmake catkin libroscpp-dev libnodelet-dev libnodeletlib-dev libnodeletlib-tools

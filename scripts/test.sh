@@ -6,6 +6,7 @@
 # --sanitize: ASan+UBSan build (.ws_sanitize/), unit tests only.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 
 build_args=(--tests)
 ctest_args=()

@@ -11,6 +11,6 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 cd "$VE_ROOT"
-if ve_wants_help "$@"; then sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 0; fi
+ve_help_on_request "$@"
 clang_tidy=$(ve_clang_tidy)
 exec /usr/bin/python3 "$VE_ROOT/scripts/tidy_tree.py" --clang-tidy "$clang_tidy" "$@"

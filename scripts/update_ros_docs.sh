@@ -6,6 +6,7 @@
 #   ./scripts/update_ros_docs.sh
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+ve_help_on_request "$@"
 bin="$(ve_bench_bin vitamin_e_ros_params)"
 table="$("$bin" --markdown)"
 /usr/bin/python3 - "$VE_ROOT/docs/ROS.md" "$table" <<'PY'
