@@ -30,6 +30,8 @@ if(CATKIN_ENABLE_TESTING)
   add_test(NAME script_config_sweep COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_config_sweep.sh)
   # Every script's -h / --help: its usage, exit 0, nothing built (seconds).
   add_test(NAME script_help COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_script_help.sh)
+  # No merge conflict markers left in the source tree (seconds).
+  add_test(NAME script_no_conflict_markers COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_no_conflict_markers.sh)
   # ./scripts/ros.sh, rosrun and the ROS tools of docs/ROS.md on this workspace (seconds).
   get_filename_component(_ve_workspace ${CATKIN_DEVEL_PREFIX} DIRECTORY)
   add_test(NAME script_ros_tools COMMAND bash ${CMAKE_CURRENT_SOURCE_DIR}/test/scripts/test_ros_tools.sh ${_ve_workspace})
