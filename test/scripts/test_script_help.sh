@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every script of scripts/ answers -h / --help with its usage and exit 0, and acts on nothing:
-# no build, no install (the workspace is a folder that must not appear). The four bench scripts whose options are their benchmark binary's are left out (their
-# --help builds that binary first). Seconds, no data.
+# no build, no install (the workspace is a folder that must not appear). Left out: the four bench
+# scripts whose options are their benchmark binary's (their --help builds that binary first).
+# Seconds, no data.
 #   test_script_help.sh
 set -uo pipefail
 root="$(cd -P "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
