@@ -5,10 +5,12 @@
 # TRAJECTORY: a trajectory file (TUM, EuRoC csv, KITTI) or a run folder with trajectory.txt.
 # GROUNDTRUTH: TUM / EuRoC csv / KITTI poses, or a dataset folder. Other flags
 # (--max-dt S, --body-to-camera YAML, --se3, --json, --aligned-out F, ...) are
-# passed through. The last line printed is the JSON result.
+# passed through (`./scripts/evaluate.sh TRAJECTORY GROUNDTRUTH --help` lists them). The last
+# line printed is the JSON result.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-ve_help_on_request "$@"
+# Only the first argument: a --help after TRAJECTORY GROUNDTRUTH is vitamin_e_evaluate's.
+ve_help_on_request "${1:-}"
 
 [ $# -ge 2 ] || ve_die "usage: ./scripts/evaluate.sh TRAJECTORY GROUNDTRUTH [--frames N] [--plot OUT.png] [flags...]"
 traj="$1"; gt="$2"; shift 2

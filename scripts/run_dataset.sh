@@ -7,11 +7,14 @@
 # Without --config, config/euroc.yaml, config/kitti.yaml or config/tum.yaml is
 # picked by the dataset's kind. Outputs: OUT_DIR/trajectory.txt (TUM, T_w_c),
 # OUT_DIR/stats.json, OUT_DIR/points.ply. VE_NO_BUILD=1 skips the build step.
+# Every other flag goes to vitamin_e_run (--save-map, --log-frames, --pipelined, ...):
+# `./scripts/run_dataset.sh DATASET OUT_DIR --help` lists them.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 usage="usage: ./scripts/run_dataset.sh DATASET OUT_DIR [--config YAML] [--calib FILE] [--topic T] [--max-frames N] [--start-frame N] [--quiet]"
-ve_help_on_request "$@"
+# Only the first argument: a --help after DATASET OUT_DIR is vitamin_e_run's.
+ve_help_on_request "${1:-}"
 [ $# -ge 2 ] || ve_die "$usage"
 dataset="$1"
 out="$2"

@@ -28,6 +28,13 @@ for script in "$root"/scripts/*.sh "$root"/scripts/*.py; do
     else ok "$name $flag"; fi
   done
 done
+# A --help after the positional arguments belongs to the tool the script passes its flags to:
+# run_dataset.sh must go on to vitamin_e_run's (here it stops first, at the missing dataset).
+VE_WS="$tmp/ws" timeout 30 "$root/scripts/run_dataset.sh" "$tmp/no_such_dataset" "$tmp/out_dir" --help \
+  >"$tmp/out" 2>"$tmp/err"
+rc=$?
+if [ $rc -ne 0 ] && grep -q "does not exist" "$tmp/err"; then ok "run_dataset.sh DATASET OUT --help is not the script's"
+else fail "run_dataset.sh DATASET OUT --help: exit $rc, printed: $(head -c 200 "$tmp/out")"; fi
 if [ -e "$tmp/ws" ]; then fail "--help made a workspace: $(find "$tmp/ws" | head -3)"; else ok "--help built nothing"; fi
 [ $fails -eq 0 ] || { echo "$fails failure(s)"; exit 1; }
 echo "all ok"
