@@ -378,7 +378,12 @@ void TrackingNodelet::cameraInfoCallback(const sensor_msgs::CameraInfoConstPtr& 
     info_sub_.shutdown();
     image_sub_.shutdown();
     compressed_sub_.shutdown();
+    early_frames_.clear();
+    return;
   }
+  std::deque<std::pair<cv::Mat, std_msgs::Header>> early;
+  early.swap(early_frames_);
+  for (auto& [gray, header] : early) enqueue(std::move(gray), header);
 }
 
 void TrackingNodelet::imuCallback(const sensor_msgs::ImuConstPtr& msg) {
@@ -414,8 +419,13 @@ void TrackingNodelet::compressedCallback(const sensor_msgs::CompressedImageConst
 
 void TrackingNodelet::enqueue(cv::Mat gray, const std_msgs::Header& header) {
   if (!calibrated_) {
-    noteRejected();
-    NODELET_WARN_THROTTLE(5.0, "image dropped: no calibration yet (set ~calibration_file or publish camera_info)");
+    // Held for the first camera_info (it may come just after its image); older ones are dropped.
+    if (early_frames_.size() == kEarlyFrames) {
+      early_frames_.pop_front();
+      noteRejected();
+      NODELET_WARN_THROTTLE(5.0, "image dropped: no calibration yet (set ~calibration_file or publish camera_info)");
+    }
+    early_frames_.emplace_back(std::move(gray), header);
     return;
   }
   if (gray.cols != camera_width_ || gray.rows != camera_height_) {

@@ -34,6 +34,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -211,6 +212,11 @@ class TrackingNodelet : public nodelet::Nodelet {
   // [image thread] The camera taken from camera_info, and whether a later one differed.
   vitamin_e::camera::Camera info_camera_;
   bool info_change_warned_ = false;
+  // [image thread] Images that came before the first camera_info (over two connections a bag's
+  // first image may overtake its camera_info): handed to the SLAM once it arrives, the newest
+  // kEarlyFrames of them, so that the first frame does not depend on that race.
+  static constexpr std::size_t kEarlyFrames = 10;
+  std::deque<std::pair<cv::Mat, std_msgs::Header>> early_frames_;
 
   // Reconfigure writes, the SLAM thread copies per frame (never held while processing).
   std::mutex options_mutex_;
