@@ -12,7 +12,6 @@
 #include <fstream>
 #include <iostream>
 #include <string>
-#include <vector>
 
 #include "cli.h"
 #include "vitamin_e/eval/metrics.h"
@@ -43,58 +42,31 @@ const char* const kUsage =
     "  --alignment-gt GT0  ground truth for TRAJ0 (default: GT)\n";
 
 using vitamin_e::cli::fail;
-using vitamin_e::cli::parseDouble;
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> positional;
   ve::EvalConfig cfg;
   std::string body_to_camera, aligned_out, gt_out, errors_out, alignment_from, alignment_gt;
   ve::ReadOptions gt_options;
   bool json_only = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) fail(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (a == "--frames") {
-      const double n = parseDouble(a, next());
-      if (n < 0 || n != static_cast<double>(static_cast<long long>(n))) fail("--frames expects a count >= 0");
-      cfg.frames = static_cast<std::size_t>(n);
-    } else if (a == "--max-dt") {
-      cfg.max_dt = parseDouble(a, next());
-    } else if (a == "--rpe-delta") {
-      cfg.rpe_delta_s = parseDouble(a, next());
-    } else if (a == "--body-to-camera") {
-      body_to_camera = next();
-    } else if (a == "--kitti-times") {
-      gt_options.kitti_times_path = next();
-    } else if (a == "--aligned-out") {
-      aligned_out = next();
-    } else if (a == "--gt-out") {
-      gt_out = next();
-    } else if (a == "--errors-out") {
-      errors_out = next();
-    } else if (a == "--alignment-from") {
-      alignment_from = next();
-    } else if (a == "--alignment-gt") {
-      alignment_gt = next();
-    } else if (a == "--se3") {
-      cfg.align_scale = false;
-    } else if (a == "--json") {
-      json_only = true;
-    } else if (a.size() > 1 && a[0] == '-') {
-      fail("unknown option '" + a + "' (see --help)");
-    } else {
-      positional.push_back(a);
+  std::string traj_path, gt_arg;
+  bool se3 = false;
+  vitamin_e::cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.value("--frames", &cfg.frames) || args.value("--max-dt", &cfg.max_dt) ||
+        args.value("--rpe-delta", &cfg.rpe_delta_s) || args.value("--body-to-camera", &body_to_camera) ||
+        args.value("--kitti-times", &gt_options.kitti_times_path) || args.value("--aligned-out", &aligned_out) ||
+        args.value("--gt-out", &gt_out) || args.value("--errors-out", &errors_out) ||
+        args.value("--alignment-from", &alignment_from) || args.value("--alignment-gt", &alignment_gt) ||
+        args.flag("--se3", &se3) || args.flag("--json", &json_only) || args.positional(&traj_path) ||
+        args.positional(&gt_arg)) {
+      continue;
     }
+    args.unknown();
   }
-  if (positional.size() != 2) fail("expected TRAJ and GT (see --help)");
+  if (se3) cfg.align_scale = false;
+  if (gt_arg.empty()) fail("expected TRAJ and GT (see --help)");
   if (!alignment_gt.empty() && alignment_from.empty()) fail("--alignment-gt needs --alignment-from");
   try {
     cfg.validate();
@@ -103,8 +75,8 @@ int main(int argc, char** argv) {
   }
 
   try {
-    const ve::Trajectory est = ve::readTrajectory(positional[0]);
-    if (est.empty()) fail(positional[0] + ": empty trajectory (no poses)");
+    const ve::Trajectory est = ve::readTrajectory(traj_path);
+    if (est.empty()) fail(traj_path + ": empty trajectory (no poses)");
     // Ground truth as camera poses: EuRoC ground truth is the body (IMU) pose,
     // turned into the camera's with the dataset's own T_BS.
     const std::string forced_body_to_camera = body_to_camera;
@@ -128,7 +100,7 @@ int main(int argc, char** argv) {
     if (!alignment_from.empty()) {
       const ve::Trajectory est0 = ve::readTrajectory(alignment_from);
       if (est0.empty()) fail(alignment_from + ": empty trajectory (no poses)");
-      const ve::Trajectory gt0 = read_ground_truth(alignment_gt.empty() ? positional[1] : alignment_gt);
+      const ve::Trajectory gt0 = read_ground_truth(alignment_gt.empty() ? gt_arg : alignment_gt);
       ve::EvalConfig cfg0 = cfg;
       cfg0.frames = 0;
       const ve::EvalResult r0 = ve::evaluate(est0, gt0, cfg0);
@@ -138,7 +110,7 @@ int main(int argc, char** argv) {
                   << 100.0 * r0.ate.rmse << " cm over " << r0.matched << " poses), applied unchanged\n";
       }
     }
-    const ve::Trajectory gt = read_ground_truth(positional[1]);
+    const ve::Trajectory gt = read_ground_truth(gt_arg);
     const ve::EvalResult r = ve::evaluate(est, gt, cfg);
     if (!aligned_out.empty()) ve::writeTum(aligned_out, r.aligned);
     if (!gt_out.empty()) ve::writeTum(gt_out, gt);
@@ -151,7 +123,7 @@ int main(int argc, char** argv) {
       std::fclose(f);
     }
     if (!json_only) {
-      std::cout << "estimate: " << positional[0] << " (" << ve::toString(ve::detectTrajectoryFormat(positional[0]))
+      std::cout << "estimate: " << traj_path << " (" << ve::toString(ve::detectTrajectoryFormat(traj_path))
                 << ")\nground truth: " << gt_path << " ("
                 << ve::toString(gt_options.format == ve::TrajectoryFormat::kAuto ? ve::detectTrajectoryFormat(gt_path)
                                                                                  : gt_options.format)

@@ -41,14 +41,6 @@ const char* const kUsage =
     "  --boxes N          room only: number of boxes in the room (default 6)\n";
 
 using vitamin_e::cli::fail;
-using vitamin_e::cli::parseDouble;
-
-int integer(const std::string& key, const std::string& v) {
-  const double d = parseDouble(key, v);
-  if (d != static_cast<double>(static_cast<long long>(d)) || std::abs(d) > 2e9)
-    fail(key + " expects an integer, got '" + v + "'");
-  return static_cast<int>(d);
-}
 
 }  // namespace
 
@@ -72,61 +64,34 @@ int main(int argc, char** argv) {
   auto room_only = [&](const std::string& key) {
     if (street) fail(key + " applies to the room scene only");
   };
-  std::string out;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) fail(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    } else if (a == "--out") {
-      out = next();
-    } else if (a == "--scene") {
-      next();  // read above
-    } else if (a == "--path") {
-      const std::string p = next();
-      if (!street) fail("--path applies to --scene street only");
-      cfg.path = p;
-    } else if (a == "--frames") {
-      cfg.frames = integer(a, next());
-    } else if (a == "--rate-hz") {
-      cfg.rate_hz = parseDouble(a, next());
-    } else if (a == "--width") {
-      cfg.width = integer(a, next());
-    } else if (a == "--height") {
-      cfg.height = integer(a, next());
-    } else if (a == "--seed") {
-      const int s = integer(a, next());
-      if (s < 0) fail("--seed must be >= 0");
-      cfg.seed = static_cast<std::uint64_t>(s);
-    } else if (a == "--speed") {
-      room_only(a);
-      cfg.speed = parseDouble(a, next());
-    } else if (a == "--noise") {
-      cfg.noise_sigma = parseDouble(a, next());
-    } else if (a == "--distortion") {
-      const std::string d = next();
-      if (d == "euroc") room_only("--distortion euroc");
-      if (d == "euroc") {
-        cfg.distortion = true;
-      } else if (d == "none") {
-        cfg.distortion = false;
-      } else {
-        fail("--distortion must be euroc or none, got '" + d + "'");
-      }
-    } else if (a == "--supersample") {
-      cfg.supersample = integer(a, next());
-    } else if (a == "--texel") {
-      cfg.texel_m = parseDouble(a, next());
-    } else if (a == "--boxes") {
-      room_only(a);
-      cfg.num_boxes = integer(a, next());
-    } else {
-      fail("unknown argument '" + a + "' (see --help)");
+  std::string out, distortion, unused_scene;
+  vitamin_e::cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.value("--out", &out) || args.value("--scene", &unused_scene) || args.value("--frames", &cfg.frames) ||
+        args.value("--rate-hz", &cfg.rate_hz) || args.value("--width", &cfg.width) ||
+        args.value("--height", &cfg.height) || args.value("--seed", &cfg.seed) ||
+        args.value("--noise", &cfg.noise_sigma) || args.value("--distortion", &distortion) ||
+        args.value("--supersample", &cfg.supersample) || args.value("--texel", &cfg.texel_m)) {
+      continue;
     }
+    // Options of one scene only: an error for the other, not a silent no-op.
+    if (args.value("--path", &cfg.path)) {
+      if (!street) fail("--path applies to --scene street only");
+    } else if (args.value("--speed", &cfg.speed)) {
+      room_only("--speed");
+    } else if (args.value("--boxes", &cfg.num_boxes)) {
+      room_only("--boxes");
+    } else {
+      args.unknown();
+    }
+  }
+  if (distortion == "euroc") {
+    room_only("--distortion euroc");
+    cfg.distortion = true;
+  } else if (distortion == "none") {
+    cfg.distortion = false;
+  } else if (!distortion.empty()) {
+    fail("--distortion must be euroc or none, got '" + distortion + "'");
   }
   if (out.empty()) fail("--out DIR is required (see --help)");
   try {

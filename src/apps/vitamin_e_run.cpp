@@ -195,69 +195,22 @@ struct Options {
   bool localization_only = false;
 };
 
-std::size_t parseCount(const std::string& key, const std::string& v) {
-  std::size_t pos = 0;
-  long long n = -1;
-  try {
-    n = std::stoll(v, &pos);
-  } catch (const std::exception&) {
-    n = -1;  // not a number, or out of range: the message below says what is wanted
-  }
-  if (pos != v.size() || n < 0) fail(key + " needs a non-negative integer, got '" + v + "'");
-  return static_cast<std::size_t>(n);
-}
-
 Options parseArgs(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      std::exit(0);
-    }
-    if (a == "--quiet" || a == "-q") {
-      o.quiet = true;
+  vitamin_e::cli::ArgParser args(argc, argv, kUsage);
+  while (args.more()) {
+    if (args.flag("--quiet", &o.quiet) || args.flag("-q", &o.quiet) || args.flag("--check", &o.check) ||
+        args.flag("--pipelined", &o.pipelined) || args.flag("--log-frames", &o.log_frames) ||
+        args.flag("--print-config", &o.print_config) || args.flag("--print-config-markdown", &o.print_reference) ||
+        args.flag("--localization-only", &o.localization_only) || args.value("--dataset", &o.dataset) ||
+        args.value("--out", &o.out) || args.value("--config", &o.config) || args.value("--calib", &o.calib) ||
+        args.value("--topic", &o.topic) || args.value("--max-frames", &o.max_frames) ||
+        args.value("--start-frame", &o.start_frame) || args.value("--stride", &o.stride) ||
+        args.value("--load-map", &o.load_map) || args.value("--save-map", &o.save_map) ||
+        args.value("--load-tsdf", &o.load_tsdf) || args.value("--save-tsdf", &o.save_tsdf)) {
       continue;
     }
-    if (a == "--check") {
-      o.check = true;
-      continue;
-    }
-    if (a == "--pipelined") {
-      o.pipelined = true;
-      continue;
-    }
-    if (a == "--log-frames") {
-      o.log_frames = true;
-      continue;
-    }
-    if (a == "--print-config") {
-      o.print_config = true;
-      continue;
-    }
-    if (a == "--print-config-markdown") {
-      o.print_reference = true;
-      continue;
-    }
-    if (a == "--localization-only") {
-      o.localization_only = true;
-      continue;
-    }
-    if (i + 1 >= argc) fail(a.rfind("--", 0) == 0 ? a + " needs a value" : "unexpected argument '" + a + "'");
-    const std::string v = argv[++i];
-    if (a == "--dataset") o.dataset = v;
-    else if (a == "--out") o.out = v;
-    else if (a == "--config") o.config = v;
-    else if (a == "--calib") o.calib = v;
-    else if (a == "--topic") o.topic = v;
-    else if (a == "--max-frames") o.max_frames = parseCount(a, v);
-    else if (a == "--start-frame") o.start_frame = parseCount(a, v);
-    else if (a == "--stride") o.stride = parseCount(a, v);
-    else if (a == "--load-map") o.load_map = v;
-    else if (a == "--save-map") o.save_map = v;
-    else if (a == "--load-tsdf") o.load_tsdf = v;
-    else if (a == "--save-tsdf") o.save_tsdf = v;
-    else fail("unknown option '" + a + "' (see --help)");
+    args.unknown();
   }
   if (o.print_config || o.print_reference) return o;
   if (o.dataset.empty()) fail("--dataset PATH is required (see --help)");
