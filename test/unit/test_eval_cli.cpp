@@ -2,68 +2,39 @@
 // next to this test) on good and bad arguments: bad input gives exactly one
 // "error: ..." line and exit code 2; good input reaches the computation.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 #include <yaml-cpp/yaml.h>
+
+#include "tool_process.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
+using Result = vitamin_e::test::ToolResult;
 
 class ToolTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
-    evaluate_ = bin / "vitamin_e_evaluate";
-    make_sequence_ = bin / "vitamin_e_make_sequence";
+    evaluate_ = vitamin_e::test::toolNextToTest("vitamin_e_evaluate");
+    make_sequence_ = vitamin_e::test::toolNextToTest("vitamin_e_make_sequence");
     // A missing tool is a failure, never a skip: a skipped test would let CI pass untested.
     ASSERT_TRUE(fs::exists(evaluate_)) << "vitamin_e_evaluate not built (" << evaluate_ << ")";
     ASSERT_TRUE(fs::exists(make_sequence_)) << "vitamin_e_make_sequence not built (" << make_sequence_ << ")";
-    dir_ = fs::temp_directory_path() / ("ve_tools_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = vitamin_e::test::freshTestDir("ve_tools_");
   }
   void TearDown() override {
     if (!dir_.empty()) fs::remove_all(dir_);
   }
-  Result run(const fs::path& tool, const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt";
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string cmd = tool.string() + " " + args + " </dev/null >" + out.string() + " 2>" + err.string();
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = readText(out);
-    r.err = readText(err);
-    return r;
-  }
+  Result run(const fs::path& tool, const std::string& args) { return vitamin_e::test::runTool(tool, args, dir_); }
   void expectBadInput(const fs::path& tool, const std::string& args, const std::string& what) {
-    const Result r = run(tool, args);
-    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
-    EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    EXPECT_NE(r.err.find(what), std::string::npos) << "'" << what << "' not in: " << r.err;
-  }
-  static std::string readText(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    vitamin_e::test::expectBadInput(run(tool, args), args, what);
   }
   // A TUM trajectory along a curve: scale s and offset (dx, 0, 0) of the same path.
   fs::path writeTrajectory(const std::string& name, double s, double dx) const {

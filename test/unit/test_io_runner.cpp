@@ -16,55 +16,29 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tool_process.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
+using Result = vitamin_e::test::ToolResult;
 
 class RunnerTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    runner_ = fs::read_symlink("/proc/self/exe").parent_path() / "vitamin_e_run";
+    runner_ = vitamin_e::test::toolNextToTest("vitamin_e_run");
     // A missing runner or tool is a failure, never a skip: a skipped test would let CI pass untested.
     ASSERT_TRUE(fs::exists(runner_)) << "vitamin_e_run not built (" << runner_ << ")";
-    dir_ = fs::temp_directory_path() / ("ve_runner_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = vitamin_e::test::freshTestDir("ve_runner_");
   }
   void TearDown() override {
     if (!dir_.empty()) fs::remove_all(dir_);
   }
-
-  Result run(const std::string& args) {
-    const fs::path out = dir_ / "stdout.txt";
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string cmd = runner_.string() + " " + args + " </dev/null >" + out.string() + " 2>" + err.string();
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = readText(out);
-    r.err = readText(err);
-    return r;
-  }
+  Result run(const std::string& args) { return vitamin_e::test::runTool(runner_, args, dir_); }
   // Exit code 2 and a single "error: ..." line containing `what`.
   void expectBadInput(const std::string& args, const std::string& what) {
-    const Result r = run(args);
-    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
-    EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-    EXPECT_NE(r.err.find(what), std::string::npos) << "'" << what << "' not in: " << r.err;
-  }
-
-  static std::string readText(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    vitamin_e::test::expectBadInput(run(args), args, what);
   }
   static void write(const fs::path& p, const std::string& text) {
     fs::create_directories(p.parent_path());
