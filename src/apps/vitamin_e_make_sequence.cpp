@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <iostream>
 #include <string>
 
 #include "cli.h"
@@ -45,15 +44,11 @@ using vitamin_e::cli::fail;
 }  // namespace
 
 int main(int argc, char** argv) {
+  vitamin_e::cli::ArgParser args(argc, argv, kUsage);  // answers -h / --help here
   // The scene first: its defaults are the starting point of every other option.
   std::string scene = "room";
   for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (a == "--scene") {
+    if (std::string(argv[i]) == "--scene") {
       if (i + 1 >= argc) fail("--scene needs a value");
       scene = argv[++i];
       if (scene != "room" && scene != "street") fail("--scene must be room or street, got '" + scene + "'");
@@ -65,7 +60,6 @@ int main(int argc, char** argv) {
     if (street) fail(key + " applies to the room scene only");
   };
   std::string out, distortion, unused_scene;
-  vitamin_e::cli::ArgParser args(argc, argv, kUsage);
   while (args.more()) {
     if (args.value("--out", &out) || args.value("--scene", &unused_scene) || args.value("--frames", &cfg.frames) ||
         args.value("--rate-hz", &cfg.rate_hz) || args.value("--width", &cfg.width) ||

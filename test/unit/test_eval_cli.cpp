@@ -108,6 +108,10 @@ TEST_F(ToolTest, MakeSequenceBadArgumentsExitWithCode2) {
   expectBadInput(make_sequence_, "--width 1.5" + out, "--width");
   expectBadInput(make_sequence_, "--bogus 1" + out, "unknown option '--bogus'");
   EXPECT_FALSE(fs::exists(dir_ / "seq"));
+  // --help wins over anything else on the line, a bad scene included.
+  const Result help = run(make_sequence_, "--scene moon --help");
+  EXPECT_EQ(help.code, 0) << help.err;
+  EXPECT_NE(help.out.find("vitamin_e_make_sequence"), std::string::npos) << help.out;
 }
 
 TEST_F(ToolTest, MakeSequenceWritesTheFramesAsked) {
