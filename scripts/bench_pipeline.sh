@@ -10,6 +10,8 @@
 # 0-159 under VE_SHARED (../shared) with config/kitti.yaml; 2 runs; all frames.
 # --config-dir DIR: euroc.yaml and kitti.yaml from DIR for both builds (an older build that lacks
 #   today's defaults runs the configs of its own commit: `git show REV:config/euroc.yaml > DIR/euroc.yaml`).
+# --base-config-dir DIR: the --base build's euroc.yaml and kitti.yaml instead (a change of the configs
+#   or of a default is then timed against the configs it replaces, with the same binary as --base).
 # Per build, dataset and mode (medians over the runs):
 #   fps        processed frames / the runner's wall time for them (stats.json wall_time_s)
 #   rt         real-time factor: fps x the camera's frame interval (median of the trajectory's steps)
@@ -21,16 +23,16 @@
 # Last line: JSON with every number. Timing only: accuracy is scripts/evaluate_suite.sh's.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-usage="usage: ./scripts/bench_pipeline.sh [--base DIR] [--runs N] [--frames N] [--stride N] [--out DIR] [--render PATH] [--kitti PATH] [--only render|kitti] [--modes LIST] [--config-dir DIR]"
+usage="usage: ./scripts/bench_pipeline.sh [--base DIR] [--runs N] [--frames N] [--stride N] [--out DIR] [--render PATH] [--kitti PATH] [--only render|kitti] [--modes LIST] [--config-dir DIR] [--base-config-dir DIR]"
 ve_help_on_request "$@"
 
-base="" runs=2 frames=0 stride=1 only="" modes="sequential pipelined" config_dir="$VE_ROOT/config"
+base="" runs=2 frames=0 stride=1 only="" modes="sequential pipelined" config_dir="$VE_ROOT/config" base_config_dir=""
 out="$(mktemp -d /tmp/ve_bench_pipeline.XXXXXX)"
 render="$(ve_list_path ../renders/V1_01_easy_30s)"
 kitti="$(ve_list_path ../shared/data/kitti/07_first160)"
 while [ $# -gt 0 ]; do
   case "$1" in
-    --base|--runs|--frames|--stride|--out|--render|--kitti|--only|--modes|--config-dir)
+    --base|--runs|--frames|--stride|--out|--render|--kitti|--only|--modes|--config-dir|--base-config-dir)
       [ $# -ge 2 ] || ve_die "$1 needs a value ($usage)" ;;&
     --base) base="$2"; shift 2 ;;
     --runs) runs="$2"; shift 2 ;;
@@ -42,13 +44,18 @@ while [ $# -gt 0 ]; do
     --only) only="$2"; shift 2 ;;
     --modes) modes="$2"; shift 2 ;;
     --config-dir) config_dir="$2"; shift 2 ;;
+    --base-config-dir) base_config_dir="$2"; shift 2 ;;
     *) ve_die "unknown option '$1' ($usage)" ;;
   esac
 done
 [[ "$runs" =~ ^[1-9][0-9]*$ ]] || ve_die "--runs must be a positive integer, got '$runs'"
 [[ "$frames" =~ ^[0-9]+$ ]] || ve_die "--frames must be a non-negative integer, got '$frames'"
 [[ "$stride" =~ ^[1-9][0-9]*$ ]] || ve_die "--stride must be a positive integer, got '$stride'"
-for c in euroc kitti; do [ -f "$config_dir/$c.yaml" ] || ve_die "--config-dir: $config_dir/$c.yaml is missing"; done
+[ -n "$base_config_dir" ] || base_config_dir="$config_dir"
+for c in euroc kitti; do
+  [ -f "$config_dir/$c.yaml" ] || ve_die "--config-dir: $config_dir/$c.yaml is missing"
+  [ -f "$base_config_dir/$c.yaml" ] || ve_die "--base-config-dir: $base_config_dir/$c.yaml is missing"
+done
 case "$only" in ""|render|kitti) ;; *) ve_die "--only takes render or kitti, got '$only'" ;; esac
 for m in $modes; do
   case "$m" in sequential|pipelined) ;; *) ve_die "--modes: unknown mode '$m' (sequential, pipelined)" ;; esac
@@ -59,6 +66,7 @@ if [ "${VE_NO_BUILD:-0}" != 1 ]; then "$VE_ROOT/scripts/build.sh" --target vitam
 [ -x "$new/vitamin_e_run" ] || ve_die "$new/vitamin_e_run is missing: build first"
 builds=(new)
 declare -A bin=([new]="$new")
+declare -A configs=([new]="$config_dir" [base]="$base_config_dir")
 if [ -n "$base" ]; then
   [ -x "$base/vitamin_e_run" ] || ve_die "--base: $base/vitamin_e_run is missing"
   builds=(new base)
@@ -68,11 +76,11 @@ fi
 sets=()
 if [ "$only" != kitti ]; then
   [ -d "$render" ] || ve_die "render '$render' does not exist (--render PATH, or --only kitti)"
-  sets+=("render|$render|$config_dir/euroc.yaml")
+  sets+=("render|$render|euroc.yaml")
 fi
 if [ "$only" != render ]; then
   [ -d "$kitti" ] || ve_die "KITTI clip '$kitti' does not exist (--kitti PATH, or --only render)"
-  sets+=("kitti|$kitti|$config_dir/kitti.yaml")
+  sets+=("kitti|$kitti|kitti.yaml")
 fi
 mkdir -p "$out"
 extra=(--stride "$stride")
@@ -91,7 +99,7 @@ for ((i = 1; i <= runs; ++i)); do
       if ((i % 2 == 0)) && [ ${#builds[@]} = 2 ]; then order=("${builds[1]}" "${builds[0]}"); fi
       for b in "${order[@]}"; do
         dir="$out/$b.$name.$mode.$i"
-        /usr/bin/time -f "%U %S %e" -o "$dir.time" "${bin[$b]}/vitamin_e_run" --dataset "$path" --config "$config" \
+        /usr/bin/time -f "%U %S %e" -o "$dir.time" "${bin[$b]}/vitamin_e_run" --dataset "$path" --config "${configs[$b]}/$config" \
           --out "$dir" --quiet "${flag[@]}" "${extra[@]}" >/dev/null 2>"$dir.stderr" \
           || { cat "$dir.stderr" >&2; ve_die "run $dir failed"; }
         ve_info "$b $name $mode run $i: $(python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print('%d frames in %.1f s' % (s['frames'], s['wall_time_s']))" "$dir/stats.json") (load $(cut -d' ' -f1 /proc/loadavg))"
