@@ -49,7 +49,7 @@ ve::map::Map windowWithOneKeyframeOff(int perturbed, const Eigen::Vector3d& offs
   }
   for (int k = 0; k < kKeyframes; ++k) {
     ve::map::Keyframe kf;
-    kf.frame_index = static_cast<std::uint64_t>(10 * k);
+    kf.frame_index = 10 * static_cast<std::uint64_t>(k);
     kf.T_w_c.translation() = keyframeCentre(k);
     for (std::size_t i = 0; i < points.size(); ++i) {
       const Eigen::Vector3d p_c = points[i] - keyframeCentre(k);
@@ -77,7 +77,7 @@ TEST(KeyframeBa, AFreedKeyframeBehindTheNewestOnesIsMovedTowardsItsPoints) {
   ve::pipeline::SystemConfig config;
   ASSERT_EQ(config.map.max_keyframes, kKeyframes);
   config.ba_free_keyframes = kKeyframes - config.ba_fixed_keyframes;  // every keyframe but the gauge
-  const Eigen::Vector3d offset(0.04, -0.03, 0.05);  // 7 cm: about 5 px at 7 m
+  const Eigen::Vector3d offset(0.04, -0.03, 0.05);                    // 7 cm: about 5 px at 7 m
   const ve::map::Map map = windowWithOneKeyframeOff(3, offset, config.map);
   ASSERT_EQ(map.keyframes().size(), static_cast<std::size_t>(kKeyframes));
   const ve::pipeline::MapUpdate u = ve::pipeline::Mapper(config, kCamera).optimizeWindow(map);
@@ -106,7 +106,8 @@ TEST(KeyframeBa, FreeKeyframesCanBeLimitedToTheNewest) {
   const ve::map::Map map = windowWithOneKeyframeOff(3, Eigen::Vector3d(0.05, 0.0, 0.0), config.map);
   const ve::pipeline::MapUpdate u = ve::pipeline::Mapper(config, kCamera).optimizeWindow(map);
   EXPECT_EQ(movedPose(u, 3), nullptr);
-  for (std::size_t k = kKeyframes - 4; k < static_cast<std::size_t>(kKeyframes); ++k) EXPECT_NE(movedPose(u, k), nullptr);
+  for (std::size_t k = kKeyframes - 4; k < static_cast<std::size_t>(kKeyframes); ++k)
+    EXPECT_NE(movedPose(u, k), nullptr);
 }
 
 int main(int argc, char** argv) {
