@@ -5,57 +5,29 @@
 // checked before anything is read.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 
+#include "tool_process.h"
+
 namespace fs = std::filesystem;
+using vitamin_e::test::ToolResult;
 
 namespace {
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 class BenchOptions : public ::testing::Test {
  protected:
   void SetUp() override {
-    bin_dir_ = fs::read_symlink("/proc/self/exe").parent_path();
-    tmp_ = fs::temp_directory_path() / ("ve_bench_opts_" + std::to_string(::getpid()));
-    fs::create_directories(tmp_);
+    bin_dir_ = vitamin_e::test::testBinaryDir();
+    tmp_ = vitamin_e::test::freshTestDir("ve_bench_opts_");
   }
   void TearDown() override { fs::remove_all(tmp_); }
-  Result run(const std::string& bench, const std::string& args) {
-    const fs::path out = tmp_ / "out.txt", err = tmp_ / "err.txt";
-    const std::string cmd = "timeout 20 " + (bin_dir_ / bench).string() + " " + args + " </dev/null >" + out.string() +
-                            " 2>" + err.string();
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
+  ToolResult run(const std::string& bench, const std::string& args) {
+    return vitamin_e::test::runTool(bin_dir_ / bench, args, tmp_, 20);
   }
   void expectOneError(const std::string& bench, const std::string& args, const std::string& what) {
-    const Result r = run(bench, args);
-    EXPECT_EQ(r.code, 2) << bench << " " << args << "\n" << r.err;
-    EXPECT_EQ(r.err.rfind("error: ", 0), 0u) << bench << " " << args << ": " << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << bench << " " << args << ": " << r.err;
-    EXPECT_NE(r.err.find(what), std::string::npos) << bench << " " << args << ": '" << what << "' not in " << r.err;
+    vitamin_e::test::expectBadInput(run(bench, args), bench + " " + args, what);
   }
   fs::path bin_dir_, tmp_;
 };
@@ -87,7 +59,7 @@ TEST_F(BenchOptions, EveryBenchmarkIsCovered) {
 TEST_F(BenchOptions, HelpPrintsTheUsageAndExitsZero) {
   for (const auto& [bench, option] : kNumberOption) {
     for (const char* help : {"--help", "-h"}) {
-      const Result r = run(bench, help);
+      const ToolResult r = run(bench, help);
       EXPECT_EQ(r.code, 0) << bench << " " << help << "\n" << r.err;
       EXPECT_EQ(r.out.rfind("usage: " + bench, 0), 0u) << bench << ": " << r.out;
       EXPECT_NE(r.out.find(option), std::string::npos) << bench << " usage does not list " << option;

@@ -27,17 +27,20 @@ inline std::string readText(const std::filesystem::path& p) {
   return ss.str();
 }
 
+// The folder of the running test executable, where CMake also builds the tools.
+inline std::filesystem::path testBinaryDir() { return std::filesystem::read_symlink("/proc/self/exe").parent_path(); }
+
 // The tool of that name in the test executable's own folder.
-inline std::filesystem::path toolNextToTest(const std::string& name) {
-  return std::filesystem::read_symlink("/proc/self/exe").parent_path() / name;
-}
+inline std::filesystem::path toolNextToTest(const std::string& name) { return testBinaryDir() / name; }
 
 // `tool args` with no stdin; stdout and stderr pass through files in `dir`.
-inline ToolResult runTool(const std::filesystem::path& tool, const std::string& args,
-                          const std::filesystem::path& dir) {
+// timeout_s > 0: killed after that many seconds (a hang fails the test, not the suite).
+inline ToolResult runTool(const std::filesystem::path& tool, const std::string& args, const std::filesystem::path& dir,
+                          int timeout_s = 0) {
   const std::filesystem::path out = dir / "stdout.txt";
   const std::filesystem::path err = dir / "stderr.txt";
-  const std::string cmd = tool.string() + " " + args + " </dev/null >" + out.string() + " 2>" + err.string();
+  const std::string limit = timeout_s > 0 ? "timeout " + std::to_string(timeout_s) + " " : "";
+  const std::string cmd = limit + tool.string() + " " + args + " </dev/null >" + out.string() + " 2>" + err.string();
   const int status = std::system(cmd.c_str());
   ToolResult r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
