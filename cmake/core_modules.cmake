@@ -36,7 +36,7 @@ endfunction()
 
 vitamin_e_module(common)
 vitamin_e_module(camera       DEPS common)
-vitamin_e_module(io           DEPS camera)
+vitamin_e_module(io           DEPS camera LIBS ${LIBDEFLATE_LIBRARY})
 vitamin_e_module(eval         DEPS common geometry)
 vitamin_e_module(synth        DEPS camera io)
 vitamin_e_module(tracking     DEPS common camera)

@@ -9,7 +9,7 @@ PACKAGES=(
   build-essential cmake catkin libroscpp-dev libnodelet-dev libnodeletlib-dev libnodeletlib-tools
   pluginlib-dev libimage-transport-dev libcv-bridge-dev libtf2-ros-dev libtf2-eigen-dev
   libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev libvisualization-msgs-dev libstd-srvs-dev
-  libpcl-conversions-dev libpcl-ros-dev libpcl-dev libopencv-dev libeigen3-dev libyaml-cpp-dev libceres-dev
+  libpcl-conversions-dev libpcl-ros-dev libpcl-dev libopencv-dev libeigen3-dev libyaml-cpp-dev libceres-dev libdeflate-dev
   librosbag-dev python3-rosbag python3-roslaunch python3-rostest librostest-dev rosbash rospack-tools
   rviz libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libgtest-dev googletest
   python3-rostopic python3-rosnode python3-rosmsg python3-rosservice
