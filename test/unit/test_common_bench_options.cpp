@@ -38,6 +38,7 @@ const std::map<std::string, std::string> kNumberOption = {
     {"bench_optimization_ba", "--threads"},   {"bench_optimization_covariance", "--points"},
     {"bench_system_soak", "--minutes"},       {"bench_system_map_file", "--points"},
     {"bench_tracking_render", "--per-frame"}, {"bench_system_step_covariance", "--frames"},
+    {"bench_io_png_decode", "--images"},
 };
 
 }  // namespace
@@ -81,6 +82,8 @@ TEST_F(BenchOptions, BadOptionsAreOneErrorLineAndExitTwo) {
   expectOneError("bench_tracking_render", (tmp_ / "none").string(), "not a render");
   expectOneError("bench_tracking_render", "--frames 1", "RENDER_DIR");
   expectOneError("bench_fusion_dense", (tmp_ / "none").string(), "not found");
+  expectOneError("bench_io_png_decode", (tmp_ / "none").string(), "not a folder");
+  expectOneError("bench_io_png_decode", tmp_.string(), "no .png file");
   expectOneError("bench_optimization_ba", "--threads 0", "--threads");
   expectOneError("bench_system_soak", "--width 10", "--width");
   expectOneError("bench_meshing_delaunay", "--repeats 0", "--repeats");
