@@ -316,6 +316,10 @@ TEST(ConfigFiles, ShippedSlamConfigsLoad) {
       ADD_FAILURE() << name << ": " << e.what();
     }
   }
+  // One keyframe retirement rule for every camera (issue 23): no shipped config opts out of it.
+  for (const auto& [name, config] : loaded) {
+    EXPECT_TRUE(config.map.retire_least_parallax) << name << " retires its keyframes by another rule";
+  }
   ASSERT_EQ(loaded.count("webcam.yaml"), 1u);
   const pl::SystemConfig& w = loaded["webcam.yaml"];
   EXPECT_EQ(w.tracker.max_points, 6800);
