@@ -14,6 +14,8 @@ namespace {
 constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 // cv::imread refuses larger images (CV_IO_MAX_IMAGE_PIXELS); such a file goes to it.
 constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 30;
+// Deflate's largest expansion (a 258-byte match in about two bits), rounded up.
+constexpr std::size_t kMaxDeflateRatio = 1040;
 
 std::uint32_t readBigEndian32(const std::uint8_t* p) {
   return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]};
@@ -124,6 +126,9 @@ bool decodeGrayPng(const std::uint8_t* bytes, std::size_t size, cv::Mat* gray) {
   const int cols = static_cast<int>(width);
   const int rows = static_cast<int>(height);
   const std::size_t stride = std::size_t{width} + 1;  // a filter byte, then the row
+  // Deflate expands by at most about 1032:1: a header that claims more rows than the data can hold
+  // is damaged, and refused before its buffer is allocated.
+  if (stride * height > compressed.size() * kMaxDeflateRatio) return false;
   std::vector<std::uint8_t> filtered(stride * height);
   const std::unique_ptr<libdeflate_decompressor, DecompressorDeleter> inflater(libdeflate_alloc_decompressor());
   if (!inflater) return false;

@@ -212,9 +212,19 @@ TEST(PngGray, DamagedFilesAreRefused) {
   putChunk(&too_tall, "IHDR", header);
   too_tall.insert(too_tall.end(), short_data.begin() + 8 + 25, short_data.end());
 
+  // A header that claims far more pixels than the data can hold (the data of 1x1).
+  Bytes huge(good.begin(), good.begin() + 8);
+  Bytes huge_header;
+  putBigEndian32(&huge_header, 20000);
+  putBigEndian32(&huge_header, 20000);
+  huge_header.insert(huge_header.end(), {8, 0, 0, 0, 0});
+  putChunk(&huge, "IHDR", huge_header);
+  const Bytes one_pixel = makePng(img.rowRange(0, 1).colRange(0, 1), {0});
+  huge.insert(huge.end(), one_pixel.begin() + 8 + 25, one_pixel.end());
+
   const std::vector<std::pair<const char*, const Bytes*>> damaged = {
-      {"bad CRC", &bad_crc}, {"flipped data", &flipped_data}, {"truncated", &truncated},
-      {"no IEND", &no_end},  {"filter 5", &bad_filter},       {"too little data", &too_tall}};
+      {"bad CRC", &bad_crc},     {"flipped data", &flipped_data}, {"truncated", &truncated}, {"no IEND", &no_end},
+      {"filter 5", &bad_filter}, {"too little data", &too_tall},  {"huge header", &huge}};
   for (const auto& [name, png] : damaged) {
     cv::Mat refused;
     EXPECT_FALSE(vitamin_e::io::decodeGrayPng(png->data(), png->size(), &refused)) << name;
