@@ -46,11 +46,25 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, const Eigen::Iso
   // ba_fixed_keyframes (gauge: pose and scale); with two keyframes only the
   // first is fixed.
   const int num_kf = static_cast<int>(kfs.size());
-  const int first_free = std::max(std::min(config_.ba_fixed_keyframes, num_kf - 1), num_kf - config_.ba_free_keyframes);
+  const int gauge = std::min(config_.ba_fixed_keyframes, num_kf - 1);
+  std::vector<bool> free_kf(static_cast<std::size_t>(num_kf), false);
+  if (keyframe_window && config_.ba_free_min_shared > 0.0 && num_kf > 0) {
+    // Free the keyframes that still see a good share of what the newest one sees.
+    const auto& newest = kfs.back().observations;
+    int mapped = 0;
+    for (const auto& o : newest) mapped += map.landmark(o.first) ? 1 : 0;
+    for (int k = gauge; k < num_kf; ++k) {
+      int shared = 0;
+      for (const auto& o : kfs[k].observations) shared += (newest.count(o.first) && map.landmark(o.first)) ? 1 : 0;
+      free_kf[k] = k == num_kf - 1 || shared >= config_.ba_free_min_shared * mapped;
+    }
+  } else if (keyframe_window) {
+    for (int k = std::max(gauge, num_kf - config_.ba_free_keyframes); k < num_kf; ++k) free_kf[k] = true;
+  }
   for (int k = 0; k < num_kf; ++k) {
     optimization::BaCamera c;
     c.T_w_c = kfs[k].T_w_c;
-    c.fixed = !keyframe_window || k < first_free;
+    c.fixed = !free_kf[k];
     problem.cameras.push_back(c);
   }
   int current_cam = -1;
@@ -91,7 +105,8 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, const Eigen::Iso
   };
   if (keyframe_window) {
     std::unordered_set<std::uint64_t> added;
-    for (int k = first_free; k < num_kf; ++k) {
+    for (int k = 0; k < num_kf; ++k) {
+      if (!free_kf[k]) continue;
       for (const auto& obs : kfs[k].observations) {
         const map::Landmark* l = map.landmark(obs.first);
         if (l && added.insert(obs.first).second) add_point(l, 0);

@@ -141,6 +141,7 @@ void SystemConfig::validate() const {
   check(ba_keyframe_sweeps >= 1, "pipeline.ba_keyframe_sweeps must be >= 1");
   check(ba_frame_sweeps >= 1, "pipeline.ba_frame_sweeps must be >= 1");
   check(ba_free_keyframes >= 1, "pipeline.ba_free_keyframes must be >= 1");
+  check(ba_free_min_shared >= 0.0 && ba_free_min_shared <= 1.0, "pipeline.ba_free_min_shared must be in [0, 1]");
   check(keyframe_parallax_px > 0.0, "pipeline.keyframe_parallax_px must be > 0");
   check(keyframe_min_mapped_ratio >= 0.0 && keyframe_min_mapped_ratio <= 1.0,
         "pipeline.keyframe_min_mapped_ratio must be in [0, 1]");

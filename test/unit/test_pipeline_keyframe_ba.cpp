@@ -1,5 +1,6 @@
 // The keyframe BA's free keyframes (Mapper::optimizeWindow): which keyframes of a
-// full window it moves (pipeline.ba_free_keyframes, pipeline.ba_fixed_keyframes).
+// full window it moves (pipeline.ba_free_keyframes, pipeline.ba_fixed_keyframes,
+// pipeline.ba_free_min_shared).
 // A keyframe the window keeps for its parallax sits behind the newest ones: held
 // fixed, it keeps whatever pose (and scale) it had when it was made; freed, the
 // BA moves it to agree with its points (docs/ROBUSTNESS.md, "How many keyframes
@@ -108,6 +109,39 @@ TEST(KeyframeBa, FreeKeyframesCanBeLimitedToTheNewest) {
   EXPECT_EQ(movedPose(u, 3), nullptr);
   for (std::size_t k = kKeyframes - 4; k < static_cast<std::size_t>(kKeyframes); ++k)
     EXPECT_NE(movedPose(u, k), nullptr);
+}
+
+TEST(KeyframeBa, WithASharedViewRuleAKeyframeThatSeesTooLittleOfTheNewestOneStaysFixed) {
+  // pipeline.ba_free_min_shared: a keyframe is free when it sees at least that share of the
+  // newest keyframe's map points. Keyframe 3 is made to see only a fifth of them.
+  ve::pipeline::SystemConfig config;
+  config.ba_free_min_shared = 0.5;
+  ve::map::Map map = windowWithOneKeyframeOff(3, Eigen::Vector3d(0.05, 0.0, 0.0), config.map);
+  const auto& newest = map.keyframes().back().observations;
+  ve::map::Keyframe sparse = map.keyframes()[3];
+  std::size_t kept = 0;
+  for (auto it = sparse.observations.begin(); it != sparse.observations.end();) {
+    if (newest.count(it->first) && kept++ % 5 != 0) {
+      it = sparse.observations.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  ve::map::Map thinned(config.map);
+  for (const auto& [id, l] : map.landmarks()) {
+    ve::map::NewLandmark n;
+    n.id = id;
+    n.p_w = l.p_w;
+    n.intensity = l.intensity;
+    thinned.addLandmark(n);
+  }
+  for (std::size_t k = 0; k < map.keyframes().size(); ++k) thinned.addKeyframe(k == 3 ? sparse : map.keyframes()[k]);
+  const ve::pipeline::MapUpdate u = ve::pipeline::Mapper(config, kCamera).optimizeWindow(thinned);
+  EXPECT_EQ(movedPose(u, 3), nullptr) << "keyframe 3 sees a fifth of the newest keyframe's points but was freed";
+  for (std::size_t k = config.ba_fixed_keyframes; k < static_cast<std::size_t>(kKeyframes); ++k) {
+    if (k != 3) EXPECT_NE(movedPose(u, k), nullptr) << "keyframe " << k << " shares the view but was held";
+  }
+  for (int k = 0; k < config.ba_fixed_keyframes; ++k) EXPECT_EQ(movedPose(u, static_cast<std::size_t>(k)), nullptr);
 }
 
 int main(int argc, char** argv) {

@@ -63,6 +63,8 @@ struct SystemConfig {
   int ba_keyframe_sweeps = 5;                 // subspace GN sweeps when a keyframe is inserted
   int ba_frame_sweeps = 3;                    // subspace GN sweeps of the per-frame BA
   int ba_free_keyframes = 4;                  // newest keyframes optimized by the keyframe BA (with their points)
+  double ba_free_min_shared = 0.0;            // experimental, 0 = off; > 0: instead, free every keyframe that sees at
+                                              // least this share of the newest keyframe's map points (never the gauge)
   double keyframe_parallax_px = 20.0;         // rotation-compensated median parallax to the last keyframe
   double keyframe_min_mapped_ratio = 0.5;     // fewer mapped tracks than this ratio also asks for a keyframe
   double max_step_depth_ratio = 1.0;          // a per-frame step longer than this x scene depth is a failure
