@@ -8,7 +8,8 @@
 # out of the way of builds and timing benchmarks.
 # Profiles as in the SLAM issue: constant exposure and 2 blur samples for *_01 and
 # *_02; dark exposure and 4 blur samples for *_03, MH_04 and MH_05. Textures: the
-# image folders under shared/data. A sequence already rendered is kept.
+# image folders under shared/data. A sequence already rendered is kept. One run at a time per
+# OUT_DIR (a second one stops at once with a message).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 ve_help_on_request "$@"
@@ -35,6 +36,10 @@ done
 tool="$shared/tools/render_sequence.py"
 [ -f "$tool" ] || ve_die "no renderer at $tool (pass --shared DIR)"
 mkdir -p "$out"
+# One render at a time per OUT_DIR: two would write the same .part folders and suite.txt, and the
+# second to finish would delete the first's result.
+exec 9> "$out/.render.lock"
+flock -n 9 || ve_die "another render_euroc_suite.sh is writing to $out; wait for it to end or pick another OUT_DIR"
 list="$out/suite.txt"
 : > "$list.tmp"
 for gt in "$shared"/data/euroc/groundtruth/*.txt; do
