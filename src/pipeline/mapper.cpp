@@ -42,9 +42,9 @@ FrameRefinement Mapper::bundleAdjust(const FrameContext* frame, const Eigen::Iso
   const auto& kfs = map.keyframes();
   // Cameras: the window's keyframes; in per-frame mode the current frame is
   // appended as the only free camera.
-  // Keyframe BA: the newest ba_free_keyframes are free, never the oldest
-  // ba_fixed_keyframes (gauge: pose and scale); with two keyframes only the
-  // first is fixed.
+  // Keyframe BA: the newest ba_free_keyframes are free (or, with the experimental
+  // ba_free_min_shared, those sharing the newest keyframe's view), never the oldest
+  // ba_fixed_keyframes (gauge: pose and scale); with two keyframes only the first is fixed.
   const int num_kf = static_cast<int>(kfs.size());
   const int gauge = std::min(config_.ba_fixed_keyframes, num_kf - 1);
   std::vector<bool> free_kf(static_cast<std::size_t>(num_kf), false);
