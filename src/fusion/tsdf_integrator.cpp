@@ -43,7 +43,7 @@ void TsdfIntegrator::integrateJob(const Job& job) {
 
 void TsdfIntegrator::submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c,
                             const meshing::PinholeImage& image) {
-  Job job{std::move(mesh), T_w_c, image};
+  Job job{std::move(mesh), T_w_c, image, false, {}};
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     ++stats_.submitted;

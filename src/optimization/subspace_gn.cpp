@@ -196,7 +196,6 @@ void SubspaceGn::run(int* sweeps, bool* converged, double* lambda_out) {
 
 void SubspaceGn::solveStep(double lambda) {
   const int ncf = freeCameras();
-  const int npf = freePoints();
   Hd_.resize(ncf);
   for (int i = 0; i < ncf; ++i) {
     // Marquardt damping on the diagonal of the whole H_cc: + lambda diag(H_cc) + eps.

@@ -58,8 +58,8 @@ TEST(Live, PipelinedTrackingGoesOnWithDroppedFrames) {
   const auto s = status.messages();
   const vitamin_e::TrackingStatus& last = *s.back();
   const std::size_t processed = last.frames_processed;
-  std::printf("live: %zu of %zu frames processed, %u tracked, %d relocalizations, %d init retries\n", processed, frames,
-              last.frames_tracked, last.relocalizations, last.init_retries);
+  std::printf("live: %zu of %zu frames processed, %llu tracked, %d relocalizations, %d init retries\n", processed,
+              frames, static_cast<unsigned long long>(last.frames_tracked), last.relocalizations, last.init_retries);
   EXPECT_LT(processed, frames) << "no frame was dropped: the test does not test what it says";
   EXPECT_GE(processed, frames / 4);
   EXPECT_EQ(last.relocalizations, 0) << last.message;

@@ -123,7 +123,7 @@ std::vector<Matrix6d> referenceCovariance(const BaProblem& p, double robust_sigm
 
 TEST(BaCovariance, MatchesADenseNumericalReference) {
   using Covariance = BaOptions::Covariance;
-  for (const auto [schur, of] :
+  for (const auto& [schur, of] :
        {std::pair{true, Covariance::kWithPoints}, std::pair{false, Covariance::kWithPoints},
         std::pair{true, Covariance::kGivenPoints}, std::pair{false, Covariance::kGivenPoints}}) {
     const bool given = of == Covariance::kGivenPoints;

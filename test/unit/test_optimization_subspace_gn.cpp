@@ -112,8 +112,9 @@ TEST(SubspaceGn, RobustKernelResistsOutliers) {
     if (s.outlier[k]) {
       ++outliers;
       outliers_kept += r[k] > 5.0;  // a 2-view track can absorb an outlier along its epipolar line
-    } else if (outliers_of_point[robust.observations[k].point] == 0)
+    } else if (outliers_of_point[robust.observations[k].point] == 0) {
       EXPECT_LT(r[k], 0.02) << k;  // GM outliers keep a tiny pull
+    }
   }
   EXPECT_GT(outliers_kept, 0.95 * outliers);
 }

@@ -267,8 +267,8 @@ TEST_F(ConfigFile, DenseDepthRangeIsOneSetting) {
 }
 
 TEST_F(ConfigFile, InternalMembersAndBadValuesAreRefusedByName) {
-  for (const std::string& key : {"init:\n  focal_px: 400\n", "pnp:\n  focal_px: 400\n", "ba:\n  max_sweeps: 5\n",
-                                 "pipeline:\n  min_init_tracks: 200\n", "ground:\n  min_inliers: 100\n"}) {
+  for (const char* const key : {"init:\n  focal_px: 400\n", "pnp:\n  focal_px: 400\n", "ba:\n  max_sweeps: 5\n",
+                                "pipeline:\n  min_init_tracks: 200\n", "ground:\n  min_inliers: 100\n"}) {
     const std::string err = loadError(key);
     EXPECT_NE(err.find("cannot be set"), std::string::npos) << key << " -> " << err;
   }

@@ -139,7 +139,9 @@ TEST(KeyframeBa, WithASharedViewRuleAKeyframeThatSeesTooLittleOfTheNewestOneStay
   const ve::pipeline::MapUpdate u = ve::pipeline::Mapper(config, kCamera).optimizeWindow(thinned);
   EXPECT_EQ(movedPose(u, 3), nullptr) << "keyframe 3 sees a fifth of the newest keyframe's points but was freed";
   for (std::size_t k = config.ba_fixed_keyframes; k < static_cast<std::size_t>(kKeyframes); ++k) {
-    if (k != 3) EXPECT_NE(movedPose(u, k), nullptr) << "keyframe " << k << " shares the view but was held";
+    if (k != 3) {
+      EXPECT_NE(movedPose(u, k), nullptr) << "keyframe " << k << " shares the view but was held";
+    }
   }
   for (int k = 0; k < config.ba_fixed_keyframes; ++k) EXPECT_EQ(movedPose(u, static_cast<std::size_t>(k)), nullptr);
 }

@@ -106,7 +106,9 @@ TEST(MeshBlockMarkers, UpdatesKeepAViewerEqualToTheMesh) {
       // A block keeps its marker id.
       for (const auto& [block, id] : idsByBlock(array, update)) {
         const auto it = first_ids.find(block);
-        if (it != first_ids.end()) EXPECT_EQ(id, it->second);
+        if (it != first_ids.end()) {
+          EXPECT_EQ(id, it->second);
+        }
       }
     }
     last_update_markers = array.markers.size();

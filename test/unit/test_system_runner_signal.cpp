@@ -330,7 +330,9 @@ TEST_F(RunnerSignal, LogFramesAndStatsCarryTheCounters) {
       EXPECT_GE(tokenValue(line, key), 0) << key << " missing: " << line;
     }
     const long b = tokenValue(line, "born"), l = tokenValue(line, "lost"), d = tokenValue(line, "dropped");
-    if (prev_tracks >= 0) EXPECT_EQ(prev_tracks, tracks - b + l + d) << line;
+    if (prev_tracks >= 0) {
+      EXPECT_EQ(prev_tracks, tracks - b + l + d) << line;
+    }
     prev_tracks = tracks;
     born += b;
     lost += l;

@@ -428,7 +428,9 @@ TEST(SystemSessionRunner, SequentialPosesComeBeforeTheirResultsWhichDoNotChange)
     if (e.is_pose) continue;
     const pl::SessionFrame plain = session.process(f.images[i], f.stamps[i]);
     ASSERT_EQ(plain.result.pose_valid, e.result.pose_valid) << i;
-    if (plain.result.pose_valid) EXPECT_TRUE(plain.result.T_w_c.isApprox(e.result.T_w_c, 1e-15)) << i;
+    if (plain.result.pose_valid) {
+      EXPECT_TRUE(plain.result.T_w_c.isApprox(e.result.T_w_c, 1e-15)) << i;
+    }
     ++i;
   }
 }

@@ -372,7 +372,9 @@ TEST(Curvature, SubpixelPeakHeightIndependentOfPhase) {
     const double sample = -k.at<float>(10, 10);
     EXPECT_NEAR(peak, height, 0.03 * height) << "offset " << ox;
     EXPECT_LE(std::fabs(peak - height), 0.5 * std::fabs(sample - height) + 1e-3) << "offset " << ox;
-    if (ox > 0.4) EXPECT_LT(sample, 0.93 * height);  // the sample alone falls short
+    if (ox > 0.4) {  // the sample alone falls short
+      EXPECT_LT(sample, 0.93 * height);
+    }
   }
 }
 
