@@ -52,8 +52,13 @@ if [ ! -f "$VE_WS/build/Makefile" ] || [ ! -f "$VE_WS/build/.ve_configured_$sani
   rm -rf "$VE_WS/build"
   mkdir -p "$VE_WS/build"
   launcher=()
-  # ccache, when installed, makes rebuilds and a second checkout's build cheap.
-  if command -v ccache >/dev/null 2>&1; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+  # ccache (setup.sh installs it) makes rebuilds cheap, and with the checkout as its base
+  # directory (paths under it hashed as relative ones) a second checkout's or a fresh clone's
+  # build of the same sources too.
+  if command -v ccache >/dev/null 2>&1; then
+    cc_launcher="/usr/bin/env;CCACHE_BASEDIR=$VE_ROOT;ccache"
+    launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER="$cc_launcher" -DCMAKE_C_COMPILER_LAUNCHER="$cc_launcher")
+  fi
   (cd "$VE_WS/build" && cmake ../src "${launcher[@]}" \
       -DCMAKE_BUILD_TYPE="$build_type" \
       -DCATKIN_DEVEL_PREFIX="$VE_WS/devel" \

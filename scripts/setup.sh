@@ -19,7 +19,7 @@ PACKAGES=(
   ros-std-msgs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-std-srvs
   python3-numpy python3-yaml python3-matplotlib python3-opencv
   xvfb xauth x11-apps imagemagick
-  clang-format clang-tidy-22
+  clang-format clang-tidy-22 ccache
 )
 
 missing=()
