@@ -13,12 +13,12 @@ namespace vitamin_e::pipeline {
 
 // A 2D track in the current frame, undistorted.
 struct FrameTrack {
-  std::uint64_t id;
-  Eigen::Vector2f uv;  // distorted pixel
-  Eigen::Vector2d xy;  // normalized undistorted
-  std::uint8_t intensity;
-  std::int8_t polarity;  // sign of the image curvature at the extremum (+1 / -1)
-  int age = 0;           // frames tracked before this one (0: detected in this frame)
+  std::uint64_t id = 0;
+  Eigen::Vector2f uv = Eigen::Vector2f::Zero();  // distorted pixel
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();  // normalized undistorted
+  std::uint8_t intensity = 0;
+  std::int8_t polarity = 1;  // sign of the image curvature at the extremum (+1 / -1)
+  int age = 0;               // frames tracked before this one (0: detected in this frame)
 };
 
 // The output of the tracking stage, the input of the mapping stage.
