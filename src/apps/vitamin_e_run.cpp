@@ -25,6 +25,7 @@
 #include <string>
 
 #include "cli.h"
+#include "vitamin_e/common/allocator.h"
 #include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/io/dataset.h"
 #include "vitamin_e/io/frame_prefetcher.h"
@@ -565,6 +566,8 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   const Options options = parseArgs(argc, argv);
   installSignalHandlers();
+  const vitamin_e::AllocatorSetting allocator = vitamin_e::reuseFreedFrameBuffers();
+  if (!allocator.applied && !options.quiet) std::fprintf(stderr, "warning: %s\n", allocator.what.c_str());
   try {
     return run(options);
   } catch (const io::DatasetError& e) {

@@ -160,6 +160,12 @@ std::vector<Row> table(TrackingParams* p) {
                   "testing: the SLAM thread holds every frame this long before processing it (a slow SLAM, "
                   "deterministically; shutdown ends the hold), in [0, 60]. A WARN at start-up when set",
                   " s"));
+  // Process
+  t.push_back(row("reuse_freed_memory", &p->reuse_freed_memory,
+                  "true: the process's allocator takes buffers up to 32 MiB from the heap and keeps freed memory up "
+                  "to 32 MiB per heap for the next frame, instead of glibc's mapping and returning each frame's "
+                  "images (about a sixth less CPU per frame on KITTI; docs/PERFORMANCE.md, Page faults). It is the "
+                  "manager process's setting: false leaves the allocator as it is"));
   return t;
 }
 

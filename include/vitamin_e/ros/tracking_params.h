@@ -50,6 +50,8 @@ struct TrackingParams {
   // Diagnostics and tests
   double diagnostic_period_s = 1.0;
   double debug_frame_delay_s = 0.0;
+  // Process
+  bool reuse_freed_memory = true;  // vitamin_e::reuseFreedFrameBuffers() at start-up
 
   bool opticalMap() const { return map_convention == "optical"; }
   // The image subscriber's queue.

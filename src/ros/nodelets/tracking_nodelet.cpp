@@ -16,6 +16,7 @@
 #include "save_file_service.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TrackingStatus.h"
+#include "vitamin_e/common/allocator.h"
 #include "vitamin_e/ros/conversions.h"
 
 namespace vitamin_e_ros {
@@ -96,6 +97,14 @@ TrackingFiles TrackingNodelet::loadConfiguration(ros::NodeHandle& pnh) {
   if (params_.debug_frame_delay_s > 0.0) {
     NODELET_WARN("~debug_frame_delay %.3f s: every frame is held that long before it is processed (for tests)",
                  params_.debug_frame_delay_s);
+  }
+  if (params_.reuse_freed_memory) {
+    const vitamin_e::AllocatorSetting allocator = vitamin_e::reuseFreedFrameBuffers();
+    if (allocator.applied) {
+      NODELET_INFO("~reuse_freed_memory: %s", allocator.what.c_str());
+    } else {
+      NODELET_WARN("~reuse_freed_memory: %s", allocator.what.c_str());
+    }
   }
   logMapFrameSource();
   TrackingFiles files;

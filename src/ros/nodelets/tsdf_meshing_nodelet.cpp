@@ -26,6 +26,7 @@
 #include "vitamin_e/SaveFile.h"
 #include "vitamin_e/TrackedFrame.h"
 #include "vitamin_e/TsdfMeshingConfig.h"
+#include "vitamin_e/common/allocator.h"
 #include "vitamin_e/fusion/dense_mapper.h"
 #include "vitamin_e/fusion/tsdf_volume.h"
 #include "vitamin_e/pipeline/system_config.h"
@@ -63,6 +64,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     std::string config_file;
     std::string load_tsdf, save_tsdf;
     int queue_size = 100;
+    bool reuse_freed_memory = true;  // as the tracking nodelet's (docs/ROS.md)
   };
   Params readParams(ros::NodeHandle& pnh) {
     Params p;
@@ -72,6 +74,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     pnh.param("queue_size", p.queue_size, p.queue_size);
     pnh.param("load_tsdf", p.load_tsdf, p.load_tsdf);
     pnh.param("save_tsdf", p.save_tsdf, p.save_tsdf);
+    pnh.param("reuse_freed_memory", p.reuse_freed_memory, p.reuse_freed_memory);
     // Parameters that overrode the yaml before: say where they went instead of ignoring them silently.
     for (const char* old : {"denoise", "voxel_size", "truncation", "max_weight", "min_depth", "max_depth",
                             "raster_downscale", "max_edge_px", "max_normal_angle_deg", "max_inv_depth_jump"}) {
@@ -89,6 +92,10 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     const Params params = readParams(pnh);
+    if (params.reuse_freed_memory) {
+      const vitamin_e::AllocatorSetting allocator = vitamin_e::reuseFreedFrameBuffers();
+      if (!allocator.applied) NODELET_WARN("~reuse_freed_memory: %s", allocator.what.c_str());
+    }
     map_frame_ = params.map_frame;
     mesh_file_ = params.mesh_file;
     load_tsdf_ = params.load_tsdf;
