@@ -16,6 +16,8 @@
 #   fps        processed frames / the runner's wall time for them (stats.json wall_time_s)
 #   rt         real-time factor: fps x the camera's frame interval (median of the trajectory's steps)
 #   cpu/f      process CPU (user + sys, every thread) per frame [ms]: what the frame costs the machine
+#   sys/f      of it, the kernel's [ms] (page faults, most of it: docs/PERFORMANCE.md, Page faults)
+#   flt/f      minor page faults per frame (/usr/bin/time %R)
 #   stages     mean wall ms per frame of each stage (stats.json timing_ms); in --pipelined mode they
 #              overlap; stats.json cpu_ms (builds that have it) gives the CPU ms per frame of each
 #              thread's stage (a stage's helper threads, e.g. the tracker's stripes, count in cpu/f only)
@@ -99,7 +101,7 @@ for ((i = 1; i <= runs; ++i)); do
       if ((i % 2 == 0)) && [ ${#builds[@]} = 2 ]; then order=("${builds[1]}" "${builds[0]}"); fi
       for b in "${order[@]}"; do
         dir="$out/$b.$name.$mode.$i"
-        /usr/bin/time -f "%U %S %e" -o "$dir.time" "${bin[$b]}/vitamin_e_run" --dataset "$path" --config "${configs[$b]}/$config" \
+        /usr/bin/time -f "%R %U %S %e" -o "$dir.time" "${bin[$b]}/vitamin_e_run" --dataset "$path" --config "${configs[$b]}/$config" \
           --out "$dir" --quiet "${flag[@]}" "${extra[@]}" >/dev/null 2>"$dir.stderr" \
           || { cat "$dir.stderr" >&2; ve_die "run $dir failed"; }
         ve_info "$b $name $mode run $i: $(python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print('%d frames in %.1f s' % (s['frames'], s['wall_time_s']))" "$dir/stats.json") (load $(cut -d' ' -f1 /proc/loadavg))"

@@ -27,7 +27,10 @@ def camera_interval(trajectory):
 
 def one_run(prefix):
     stats = json.load(open(os.path.join(prefix, "stats.json")))
-    user, sys_, elapsed = map(float, open(prefix + ".time").read().split()[-3:])
+    # "[MINOR_FAULTS] USER SYS ELAPSED" (/usr/bin/time; older runs have no fault count)
+    fields = open(prefix + ".time").read().split()
+    user, sys_, elapsed = map(float, fields[-3:])
+    faults = float(fields[-4]) if len(fields) >= 4 else float("nan")
     frames = stats["frames"]
     fps = frames / stats["wall_time_s"] if stats["wall_time_s"] > 0 else 0.0
     dt = camera_interval(os.path.join(prefix, "trajectory.txt"))
@@ -39,6 +42,8 @@ def one_run(prefix):
         "fps": fps,
         "rt": fps * dt,
         "cpu_ms_per_frame": 1000.0 * (user + sys_) / max(frames, 1),
+        "sys_ms_per_frame": 1000.0 * sys_ / max(frames, 1),
+        "faults_per_frame": faults / max(frames, 1),
         "process_s": elapsed,
         "stage_ms": {k: v["mean"] for k, v in stats.get("timing_ms", {}).items()},
         "cpu_ms": dict(stats.get("cpu_ms", {})),
@@ -70,14 +75,15 @@ def main():
     for s in sets:
         result["sets"][s] = {}
         lines.append(f"== {s} ==")
-        head = f"{'build':6} {'mode':10} {'fps':>6} {'rt':>5} {'cpu/f':>6} {'eff':>5} |" + "".join(
+        head = f"{'build':6} {'mode':10} {'fps':>6} {'rt':>5} {'cpu/f':>6} {'sys/f':>5} {'flt/f':>6} {'eff':>5} |" + "".join(
             f" {st[:8]:>8}" for st in STAGES) + " | tracked reinit reloc"
         lines.append(head)
         for b in builds:
             per_mode = {}
             for m in modes:
                 runs = [one_run(os.path.join(out, f"{b}.{s}.{m}.{i}")) for i in range(1, nruns + 1)]
-                agg = {k: median_of(runs, k) for k in ("fps", "rt", "cpu_ms_per_frame", "process_s")}
+                agg = {k: median_of(runs, k) for k in ("fps", "rt", "cpu_ms_per_frame", "sys_ms_per_frame", "faults_per_frame",
+                                                  "process_s")}
                 agg["stage_ms"] = median_map(runs, "stage_ms")
                 agg["cpu_ms"] = median_map(runs, "cpu_ms")
                 agg["frames"] = runs[0]["frames"]
@@ -93,7 +99,8 @@ def main():
             for m, a in per_mode.items():
                 eff = f"{a['efficiency']:5.2f}" if "efficiency" in a else "    -"
                 cells = "".join(f" {a['stage_ms'][st]:8.2f}" if st in a["stage_ms"] else f" {'-':>8}" for st in STAGES)
-                lines.append(f"{b:6} {m:10} {a['fps']:6.1f} {a['rt']:5.2f} {a['cpu_ms_per_frame']:6.1f} {eff} |{cells}"
+                lines.append(f"{b:6} {m:10} {a['fps']:6.1f} {a['rt']:5.2f} {a['cpu_ms_per_frame']:6.1f}"
+                             f" {a['sys_ms_per_frame']:5.1f} {a['faults_per_frame']:6.0f} {eff} |{cells}"
                              f" | {'/'.join(map(str, a['tracked']))} of {a['frames']}"
                              f" {'/'.join(map(str, a['init_retries']))} {'/'.join(map(str, a['relocalizations']))}")
                 if a["cpu_ms"]:
@@ -106,7 +113,8 @@ def main():
                 lines.append(f"new/base fps, {m}: {n / o:.2f}" if o > 0 else f"new/base fps, {m}: -")
     print("\n".join(lines))
     print("(fps: frames / runner wall time; rt: real-time factor at the camera's rate; cpu/f: process CPU ms per"
-          " frame, all threads; eff: pipelined / sequential fps; stage columns: mean wall ms per frame)")
+          " frame, all threads; sys/f: of it in the kernel; flt/f: minor page faults per frame; eff: pipelined /"
+          " sequential fps; stage columns: mean wall ms per frame)")
     print(json.dumps(result))
 
 

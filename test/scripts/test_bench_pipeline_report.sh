@@ -11,7 +11,7 @@ expect() {  # expect DESCRIPTION EXPECTED ACTUAL
   if [ "$2" = "$3" ]; then echo "ok: $1"; else echo "FAIL: $1: expected '$2', got '$3'"; fails=$((fails + 1)); fi
 }
 
-# run BUILD MODE RUN WALL_S CPU_S: 100 frames 0.1 s apart (a 10 Hz camera) in WALL_S seconds.
+# run BUILD MODE RUN WALL_S USER_S [MINOR_FAULTS [SYS_S]]: 100 frames 0.1 s apart (a 10 Hz camera) in WALL_S seconds.
 run() {
   local dir="$tmp/$1.kitti.$2.$3"
   mkdir -p "$dir"
@@ -19,11 +19,11 @@ run() {
   "timing_ms": {"tracking": {"mean": 9.5}, "total": {"mean": 20}}, "cpu_ms": {"tracking": 9.0, "mapping": 7.5},
   "dense": {"fused": 98, "dropped": 0}}\n' "$4" >"$dir/stats.json"
   awk 'BEGIN { for (i = 0; i < 100; ++i) printf "%.1f 0 0 0 0 0 0 1\n", 100 + 0.1 * i }' >"$dir/trajectory.txt"
-  echo "$5 0.0 $4" >"$dir.time"
+  echo "${6:-1000} $5 ${7:-0.0} $4" >"$dir.time"
 }
 # new: sequential 4 s and 5 s (25 and 20 fps: median 22.5), pipelined 2 s twice (50 fps).
-run new sequential 1 4 4.1
-run new sequential 2 5 4.9
+run new sequential 1 4 4.0 2000 0.1
+run new sequential 2 5 4.7 4000 0.2
 run new pipelined 1 2 4.0
 run new pipelined 2 2 4.2
 # base: sequential 5 s, pipelined 4 s (20 and 25 fps).
@@ -41,6 +41,8 @@ expect "real-time factor at 10 Hz" "5.0" "$(get "round(r['sets']['kitti']['new']
 expect "efficiency" "2.222" "$(get "round(r['sets']['kitti']['new']['pipelined']['efficiency'], 3)")"
 expect "base efficiency" "1.25" "$(get "round(r['sets']['kitti']['base']['pipelined']['efficiency'], 3)")"
 expect "process CPU ms per frame (median)" "45.0" "$(get "round(r['sets']['kitti']['new']['sequential']['cpu_ms_per_frame'], 3)")"
+expect "minor page faults per frame (median)" "30.0" "$(get "round(r['sets']['kitti']['new']['sequential']['faults_per_frame'], 3)")"
+expect "kernel CPU ms per frame (median)" "1.5" "$(get "round(r['sets']['kitti']['new']['sequential']['sys_ms_per_frame'], 3)")"
 expect "CPU ms by thread stage" "7.5" "$(get "r['sets']['kitti']['new']['pipelined']['cpu_ms']['mapping']")"
 expect "the table has a row per build and mode" "4" "$(grep -cE '^(new|base) +(sequential|pipelined)' <<<"$out")"
 expect "new/base line" "new/base fps, pipelined: 2.00" "$(grep 'new/base fps, pipelined' <<<"$out")"
