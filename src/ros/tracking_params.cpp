@@ -164,7 +164,8 @@ std::vector<Row> table(TrackingParams* p) {
   t.push_back(row("reuse_freed_memory", &p->reuse_freed_memory,
                   "true: the process's allocator takes buffers up to 32 MiB from the heap and keeps freed memory up "
                   "to 32 MiB per heap for the next frame, instead of glibc's mapping and returning each frame's "
-                  "images (about a sixth less CPU per frame on KITTI; docs/PERFORMANCE.md, Page faults). It is the "
+                  "images (KITTI 07: 14 % less CPU per frame sequential, 3-7 % pipelined; docs/PERFORMANCE.md, Page "
+                  "faults). It is the "
                   "manager process's setting: false leaves the allocator as it is"));
   return t;
 }
