@@ -38,6 +38,18 @@ struct Block {
   bool reported = false;                  // takeChangedBlocks() gave it with triangles last time
 };
 
+// A frame mesh rasterised for fusion (TsdfVolume::integrate): the triangle seen at each pixel of
+// a raster of (width, height) = the image's / s, and every triangle's plane in the full image.
+struct MeshRaster {
+  // Inverse depth inv0 + du (u - u0) + dv (v - v0) at the full image's pixel (u, v).
+  struct Plane {
+    double u0 = 0.0, v0 = 0.0, inv0 = 0.0, du = 0.0, dv = 0.0;
+  };
+  int s = 1, width = 0, height = 0;
+  std::vector<int> triangle;  // per raster pixel, row-major; -1: none
+  std::vector<Plane> planes;  // per mesh triangle
+};
+
 struct TsdfVolume::Impl {
   TsdfConfig config;
   std::unordered_map<std::uint64_t, std::unique_ptr<Block>> blocks;
@@ -57,6 +69,12 @@ struct TsdfVolume::Impl {
     return it == blocks.end() ? nullptr : it->second.get();
   }
   void remeshBlock(const Eigen::Vector3i& b, Block* block) const;  // tsdf_extract.cpp
+  // Updates the voxels near the measured surface (tsdf_volume.cpp): `depth` (map units, on
+  // depth_image's pixels) finds the blocks; the voxels read it at their nearest pixel, or, with
+  // `mesh`, the mesh's planes at their projection into `image`.
+  IntegrationStats fuse(const std::vector<float>& depth, const meshing::PinholeImage& depth_image,
+                        const MeshRaster* mesh, const meshing::PinholeImage& image, const Eigen::Isometry3d& T_map_c);
+  std::vector<std::uint64_t> keys;  // fuse()'s blocks, kept for their buffer
 };
 
 }  // namespace vitamin_e::fusion

@@ -350,7 +350,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("min_extract_weight", &tsdf.min_extract_weight, "voxels lighter than this count as unobserved in the mesh");
   t.key("weight_depth_ref", &tsdf.weight_depth_ref,
         "a measurement weighs min(1, (this / z)^2) (map units); 0: every measurement weighs 1");
-  t.key("raster_downscale", &tsdf.raster_downscale, "frame meshes are rasterized at (width, height) / this, [1, 16]");
+  t.key("raster_downscale", &tsdf.raster_downscale,
+        "frame meshes are rasterized at (width, height) / this, [0, 16]; 0: half a voxel's size in pixels at the "
+        "mesh's far depth (at most 8)");
   t.key("asynchronous", &d.integrator.asynchronous, "fuse on the integrator's own thread");
   t.key("queue_capacity", &d.integrator.queue_capacity, "frames queued for that thread (>= 1)");
   t.key("block_when_full", &d.integrator.block_when_full,

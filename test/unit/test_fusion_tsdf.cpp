@@ -101,6 +101,56 @@ TEST(Tsdf, PlaneFromFrameMeshesIsWithinOneVoxel) {
   }
 }
 
+// A voxel takes the measured depth from its triangle's plane at its own projection, so on a
+// planar mesh its signed distance is the exact projective one, whatever the raster's resolution
+// (a depth map's nearest pixel would be off by up to half a pixel's slope).
+TEST(Tsdf, VoxelsReadTheTrianglesPlaneAtTheirProjection) {
+  const PinholeImage image = smallImage();
+  const Isometry3d T = lookAt(Vector3d(0.3, -0.2, 1.1), Vector3d(0.0, 0.1, 0.0));  // slanted view of z = 0
+  const meshing::FrameMesh mesh = planeMesh(T, image, 7);
+  for (int s : {1, 4}) {
+    fusion::TsdfConfig cfg;
+    cfg.voxel_size = 0.02;
+    cfg.truncation = 0.06;
+    cfg.raster_downscale = s;
+    fusion::TsdfVolume volume(cfg);
+    EXPECT_EQ(volume.integrate(mesh, T, image).raster_downscale, s);
+    const Isometry3d T_c_w = T.inverse();
+    std::size_t checked = 0;
+    double worst = 0.0;
+    volume.forEachVoxel([&](const Vector3d& p_w, const fusion::Voxel& v) {
+      // Along the ray from the camera through the voxel: the plane z = 0 at distance t * |ray|.
+      const Vector3d ray_w = p_w - T.translation();
+      const double t = -T.translation().z() / ray_w.z();  // the plane at camera + t * ray_w
+      const double expected = (t - 1.0) * ray_w.norm();
+      if (!(t > 0.0) || std::abs(expected) >= 0.9 * cfg.truncation) return;
+      const Vector3d p_c = T_c_w * p_w;
+      const Eigen::Vector2d uv = image.K.projectPoint(p_c);
+      if (uv.x() < 20 || uv.y() < 20 || uv.x() > image.width - 20 || uv.y() > image.height - 20) return;  // mesh inside
+      worst = std::max(worst, std::abs(v.sdf - expected));
+      ++checked;
+    });
+    EXPECT_GT(checked, 2000u) << "raster_downscale " << s;
+    EXPECT_LT(worst, 1e-5) << "raster_downscale " << s;
+  }
+}
+
+// raster_downscale 0: half the voxel's size in pixels at the mesh's far depth (here a wall
+// facing the camera at one depth: 200 px focal length x 0.05 / z), between 1 and 8.
+TEST(Tsdf, AutomaticRasterFollowsTheVoxelsSizeInPixels) {
+  const PinholeImage image = smallImage();
+  for (const auto& [depth, expected] : std::vector<std::pair<double, int>>{{0.5, 8}, {1.0, 5}, {2.0, 2}, {6.0, 1}}) {
+    const Isometry3d T = lookAt(Vector3d(0.0, 0.0, depth), Vector3d(0.0, 0.0, 0.0));
+    fusion::TsdfConfig cfg;
+    cfg.voxel_size = 0.05;
+    cfg.truncation = 0.15;
+    fusion::TsdfVolume volume(cfg);
+    const fusion::IntegrationStats stats = volume.integrate(planeMesh(T, image, 3), T, image);
+    EXPECT_EQ(stats.raster_downscale, expected) << "depth " << depth;
+    EXPECT_GT(stats.voxels_updated, 1000u) << "depth " << depth;
+  }
+}
+
 TEST(Tsdf, SameFrameTwiceOnlyChangesWeights) {
   const PinholeImage image = smallImage();
   const Isometry3d T = lookAt(Vector3d(0.2, 0.1, 1.2), Vector3d(0.0, 0.0, 0.0));

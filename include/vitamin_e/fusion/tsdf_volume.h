@@ -2,10 +2,11 @@
 // Voxel-hashed truncated signed distance field. Space is split into blocks of
 // block_voxels^3 voxels kept in a hash map keyed by the block index, allocated
 // on demand around observed surfaces. integrate() rasterises a frame's mesh
-// into a depth map (z-buffer, inverse depth interpolated linearly in the image,
-// exact for planar triangles), then updates every voxel of the blocks near the
-// surface with the projective signed distance along the ray, truncated, as a
-// running weighted average (weight capped at max_weight). extractMesh() runs
+// (z-buffer) to find which triangle each voxel of the blocks near the surface
+// sees, and takes the measured depth from that triangle's plane (inverse depth
+// is affine in the image over a planar triangle) at the voxel's projection; the
+// voxel is updated with the projective signed distance along the ray, truncated,
+// as a running weighted average (weight capped at max_weight). extractMesh() runs
 // marching cubes (fusion/marching_cubes.h: ambiguous faces resolved from their
 // own corner signs, so watertight) on the blocks that changed since the last
 // call (and their lower neighbours, which read their voxels), reusing the
@@ -47,7 +48,10 @@ struct TsdfConfig {
   // Measurement weight min(1, (weight_depth_ref / z)^2) (depth noise grows with
   // z^2 for triangulated points); 0: every measurement weighs 1.
   double weight_depth_ref = 0.0;
-  int raster_downscale = 1;  // depth map at (width, height) / raster_downscale
+  // The triangle raster at (width, height) / raster_downscale; 0: from the voxel's size in
+  // pixels at the mesh's far depth (half of it, at most 8), so a voxel picks its triangle to
+  // within a quarter of its size.
+  int raster_downscale = 0;
   void validate() const;     // throws std::invalid_argument naming the key
 };
 
@@ -82,6 +86,7 @@ struct IntegrationStats {
   std::size_t blocks_allocated = 0;
   std::size_t voxels_updated = 0;
   std::size_t pixels_with_depth = 0;
+  int raster_downscale = 1;  // integrate(): the mesh raster's downscale used (TsdfConfig::raster_downscale)
 };
 
 class TsdfVolume {
