@@ -52,7 +52,7 @@ struct TsdfConfig {
   // pixels at the mesh's far depth (half of it, at most 8), so a voxel picks its triangle to
   // within a quarter of its size.
   int raster_downscale = 0;
-  void validate() const;     // throws std::invalid_argument naming the key
+  void validate() const;  // throws std::invalid_argument naming the key
 };
 
 // A TSDF file that cannot be read or does not fit the volume (TsdfVolume::load).
