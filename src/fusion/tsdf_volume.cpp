@@ -150,7 +150,7 @@ IntegrationStats TsdfVolume::integrate(const meshing::FrameMesh& mesh, const Eig
   MeshRaster raster;
   raster.s = cfg.raster_downscale > 0 ? cfg.raster_downscale
                                       : rasterScaleFor(mesh, image.K, cfg.voxel_size * impl_->scaling.scale,
-                                                       cfg.max_depth * impl_->scaling.scale);
+                                                       cfg.max_depth);  // the voxel in map units, as max_depth
   const meshing::PinholeImage small = scaled(image, raster.s);
   raster.width = small.width;
   raster.height = small.height;

@@ -149,6 +149,14 @@ TEST(Tsdf, AutomaticRasterFollowsTheVoxelsSizeInPixels) {
     EXPECT_EQ(stats.raster_downscale, expected) << "depth " << depth;
     EXPECT_GT(stats.voxels_updated, 1000u) << "depth " << depth;
   }
+  // After the map was scaled by 2 the same voxel is twice as large in map units (and in pixels).
+  const Isometry3d T = lookAt(Vector3d(0.0, 0.0, 2.0), Vector3d(0.0, 0.0, 0.0));
+  fusion::TsdfConfig cfg;
+  cfg.voxel_size = 0.05;
+  cfg.truncation = 0.15;
+  fusion::TsdfVolume volume(cfg);
+  volume.rescale(Vector3d::Zero(), 2.0);
+  EXPECT_EQ(volume.integrate(planeMesh(T, image, 3), T, image).raster_downscale, 5);
 }
 
 TEST(Tsdf, SameFrameTwiceOnlyChangesWeights) {
