@@ -5,19 +5,15 @@
 #include <string>
 
 #include "tsdf_impl.h"
+#include "vitamin_e/common/rounding.h"
 
 namespace vitamin_e::fusion {
+
+using common::roundHalfAway;
 
 namespace {
 constexpr int kMaxAutoRasterDownscale = 8;
 double sq(double x) { return x * x; }
-// std::lround for |x| < 2^31, inline: the libm call was a tenth of the voxel loop's instructions.
-// (The truncation and x - i are exact; ties go away from zero, as lround's do.)
-inline int roundHalfAway(double x) {
-  const int i = static_cast<int>(x);
-  const double f = x - static_cast<double>(i);
-  return i + (f >= 0.5 ? 1 : 0) - (f <= -0.5 ? 1 : 0);
-}
 void require(bool ok, const char* key, const std::string& what) {
   if (!ok) throw std::invalid_argument(std::string("tsdf.") + key + ": " + what);
 }

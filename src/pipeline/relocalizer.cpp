@@ -6,6 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "vitamin_e/common/rounding.h"
+
 namespace vitamin_e::pipeline {
 
 void RelocalizerConfig::validate() const {
@@ -202,7 +204,7 @@ void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, c
   for (std::size_t i : spread(frame, mapped, config_.points_per_keyframe)) {
     const FrameTrack& t = frame.tracks[i];
     Point p;
-    if (!brief_.describe(smoothed, static_cast<int>(std::lround(t.uv.x())), static_cast<int>(std::lround(t.uv.y())),
+    if (!brief_.describe(smoothed, common::roundHalfAway(t.uv.x()), common::roundHalfAway(t.uv.y()),
                          &p.descriptor)) {
       continue;
     }
@@ -249,7 +251,7 @@ Relocalization Relocalizer::relocalize(const cv::Mat& image, const FrameContext&
     for (std::size_t i : query) {
       const FrameTrack& t = frame.tracks[i];
       tracking::BriefDescriptor desc;
-      if (!b.describe(smoothed, static_cast<int>(std::lround(t.uv.x())), static_cast<int>(std::lround(t.uv.y())),
+      if (!b.describe(smoothed, common::roundHalfAway(t.uv.x()), common::roundHalfAway(t.uv.y()),
                       &desc)) {
         continue;
       }

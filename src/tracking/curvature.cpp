@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "tracker_internal.h"
+#include "vitamin_e/common/rounding.h"
 
 namespace vitamin_e::tracking {
 
@@ -126,8 +127,13 @@ void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std
 bool hillClimb(const cv::Mat& kappa, const Eigen::Vector2f& prediction, const ClimbParams& p, Eigen::Vector2i* out) {
   const int xmin = p.border, ymin = p.border;
   const int xmax = kappa.cols - 1 - p.border, ymax = kappa.rows - 1 - p.border;
-  int x = static_cast<int>(std::lround(prediction.x()));
-  int y = static_cast<int>(std::lround(prediction.y()));
+  // A prediction far outside any image (or not finite) has nothing to climb.
+  if (!(std::fabs(prediction.x()) < 1e9f && std::fabs(prediction.y()) < 1e9f)) {
+    *out = Eigen::Vector2i::Zero();
+    return false;
+  }
+  int x = common::roundHalfAway(prediction.x());
+  int y = common::roundHalfAway(prediction.y());
   *out = Eigen::Vector2i(x, y);
   if (x < xmin || x > xmax || y < ymin || y > ymax) return false;
   const float px = prediction.x(), py = prediction.y();

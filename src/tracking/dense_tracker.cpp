@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "tracker_internal.h"
+#include "vitamin_e/common/rounding.h"
 #include "vitamin_e/common/timing.h"
 #include "vitamin_e/tracking/affine_flow.h"
 #include "vitamin_e/tracking/brief.h"
@@ -374,7 +375,7 @@ int DenseTracker::Impl::detect(const cv::Mat& gray, float scale, std::vector<Tra
   cell_count.assign(static_cast<size_t>(gw) * gh, 0);
   cell_slots.assign(static_cast<size_t>(gw) * gh * k, -1);
   for (const Track& t : next_tracks) {
-    const int x = static_cast<int>(std::lround(t.uv.x())), y = static_cast<int>(std::lround(t.uv.y()));
+    const int x = common::roundHalfAway(t.uv.x()), y = common::roundHalfAway(t.uv.y());
     ++cell_count[(y / cs) * gw + x / cs];
   }
   for (int i = 0; i < static_cast<int>(cands.size()); ++i) {
@@ -615,7 +616,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const st
   const int r = cfg.nms_radius_px;
   auto mark_blocked = [&](std::uint8_t v) {
     for (const Track& tr : m.next_tracks) {
-      const int x = static_cast<int>(std::lround(tr.uv.x())), y = static_cast<int>(std::lround(tr.uv.y()));
+      const int x = common::roundHalfAway(tr.uv.x()), y = common::roundHalfAway(tr.uv.y());
       for (int yy = std::max(0, y - r); yy <= std::min(gray.rows - 1, y + r); ++yy) {
         std::uint8_t* row = m.blocked.ptr<std::uint8_t>(yy);
         for (int xx = std::max(0, x - r); xx <= std::min(gray.cols - 1, x + r); ++xx) row[xx] = v;
@@ -636,8 +637,8 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const st
     p.id = tr.id;
     p.uv = tr.uv;
     p.age = tr.age;
-    const int x = std::clamp(static_cast<int>(std::lround(tr.uv.x())), 0, gray.cols - 1);
-    const int y = std::clamp(static_cast<int>(std::lround(tr.uv.y())), 0, gray.rows - 1);
+    const int x = std::clamp(common::roundHalfAway(tr.uv.x()), 0, gray.cols - 1);
+    const int y = std::clamp(common::roundHalfAway(tr.uv.y()), 0, gray.rows - 1);
     p.curvature = m.kappa.ptr<float>(y)[x] * inv_scale;
     p.intensity = gray.ptr<std::uint8_t>(y)[x];
     out.points.push_back(p);
