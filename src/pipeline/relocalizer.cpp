@@ -204,8 +204,7 @@ void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, c
   for (std::size_t i : spread(frame, mapped, config_.points_per_keyframe)) {
     const FrameTrack& t = frame.tracks[i];
     Point p;
-    if (!brief_.describe(smoothed, common::roundHalfAway(t.uv.x()), common::roundHalfAway(t.uv.y()),
-                         &p.descriptor)) {
+    if (!brief_.describe(smoothed, common::roundHalfAway(t.uv.x()), common::roundHalfAway(t.uv.y()), &p.descriptor)) {
       continue;
     }
     p.landmark_id = landmarks[i]->id;
@@ -251,8 +250,7 @@ Relocalization Relocalizer::relocalize(const cv::Mat& image, const FrameContext&
     for (std::size_t i : query) {
       const FrameTrack& t = frame.tracks[i];
       tracking::BriefDescriptor desc;
-      if (!b.describe(smoothed, common::roundHalfAway(t.uv.x()), common::roundHalfAway(t.uv.y()),
-                      &desc)) {
+      if (!b.describe(smoothed, common::roundHalfAway(t.uv.x()), common::roundHalfAway(t.uv.y()), &desc)) {
         continue;
       }
       d.descriptors.push_back(desc);
