@@ -150,8 +150,18 @@ IntegrationStats TsdfVolume::integrate(const meshing::FrameMesh& mesh, const Eig
   const meshing::PinholeImage small = scaled(image, raster.s);
   raster.width = small.width;
   raster.height = small.height;
-  std::vector<float> d = rasterize(mesh, 1.0 / raster.s, 0.5, small.width, small.height, &raster.triangle);
+  const bool full_size = raster.s == 1;
+  std::vector<float> d =
+      rasterize(mesh, 1.0 / raster.s, 0.5, small.width, small.height, full_size ? nullptr : &raster.triangle);
   for (float& v : d) v = v > 0.0f ? 1.0f / v : 0.0f;
+  IntegrationStats stats;
+  if (full_size) {
+    // At full size the raster is the depth map itself: a voxel reads its nearest pixel (within half a
+    // pixel of its projection), one array instead of the triangle ids and the planes.
+    stats = impl_->fuse(d, small, nullptr, image, T_w_c);
+    stats.raster_downscale = 1;
+    return stats;
+  }
   raster.planes.resize(mesh.triangles.size());
   for (std::size_t k = 0; k < mesh.triangles.size(); ++k) {
     const Eigen::Vector3i& t = mesh.triangles[k];
@@ -168,7 +178,7 @@ IntegrationStats TsdfVolume::integrate(const meshing::FrameMesh& mesh, const Eig
       plane.dv = (d2 * e1.x() - d1 * e2.x()) / det;
     }
   }
-  IntegrationStats stats = impl_->fuse(d, small, &raster, image, T_w_c);
+  stats = impl_->fuse(d, small, &raster, image, T_w_c);
   stats.raster_downscale = raster.s;
   return stats;
 }

@@ -2,11 +2,13 @@
 // Voxel-hashed truncated signed distance field. Space is split into blocks of
 // block_voxels^3 voxels kept in a hash map keyed by the block index, allocated
 // on demand around observed surfaces. integrate() rasterises a frame's mesh
-// (z-buffer) to find which triangle each voxel of the blocks near the surface
-// sees, and takes the measured depth from that triangle's plane (inverse depth
-// is affine in the image over a planar triangle) at the voxel's projection; the
-// voxel is updated with the projective signed distance along the ray, truncated,
-// as a running weighted average (weight capped at max_weight). extractMesh() runs
+// (z-buffer, inverse depth interpolated linearly in the image, exact for planar
+// triangles); each voxel of the blocks near the surface takes the measured depth
+// from the raster's pixel nearest to its projection, or, when the raster is
+// smaller than the image, from the plane (inverse depth is affine in the image)
+// of the triangle seen there, at the projection itself. The voxel is updated
+// with the projective signed distance along the ray, truncated, as a running
+// weighted average (weight capped at max_weight). extractMesh() runs
 // marching cubes (fusion/marching_cubes.h: ambiguous faces resolved from their
 // own corner signs, so watertight) on the blocks that changed since the last
 // call (and their lower neighbours, which read their voxels), reusing the
