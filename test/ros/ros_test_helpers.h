@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <ros/master.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 
@@ -43,6 +44,27 @@ class Watcher {
       cv_.wait_for(lock, std::chrono::milliseconds(20));  // connection has no event to wait on: poll
     }
     return true;
+  }
+  // Waits until the subscription is connected to every publisher the master lists for its topic
+  // (at least one). /rosout has one per node, this test's own among them: waitForPublisher() may
+  // return before the node whose one-off message a test waits for is connected.
+  bool waitForAllPublishers(double timeout_s) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (true) {
+      XmlRpc::XmlRpcValue request, response, payload;
+      request[0] = ros::this_node::getName();
+      int listed = 0;
+      if (ros::master::execute("getSystemState", request, response, payload, false) && payload.size() > 0) {
+        XmlRpc::XmlRpcValue& publishers = payload[0];  // [[topic, [node, ...]], ...]
+        for (int i = 0; i < publishers.size(); ++i) {
+          if (static_cast<std::string>(publishers[i][0]) == sub_.getTopic()) listed = publishers[i][1].size();
+        }
+      }
+      if (listed > 0 && sub_.getNumPublishers() >= static_cast<uint32_t>(listed)) return true;
+      if (!ros::ok() || std::chrono::steady_clock::now() > deadline) return false;
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait_for(lock, std::chrono::milliseconds(20));  // connection has no event to wait on: poll
+    }
   }
   std::vector<typename Msg::ConstPtr> messages() {
     std::lock_guard<std::mutex> lock(mutex_);
