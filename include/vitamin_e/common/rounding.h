@@ -1,6 +1,6 @@
 #pragma once
 // Rounding to the nearest integer with ties away from zero, as std::lround, but inline: the libm
-// call was a tenth of the TSDF's voxel loop and a fifth of the tracker's hill climb (callgrind).
+// call was a tenth of the TSDF's voxel loop and of the tracker's hill climb (callgrind).
 // For |x| < 2^31 only (pixel coordinates): the truncation and x - i are then exact, so the result
 // is lround's to the bit.
 
