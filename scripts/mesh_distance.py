@@ -8,6 +8,7 @@ searched within one cell of size H around it (2 H when none is that close).
 Prints the vertex counts, the median and p90 of those distances and the share of A's vertices
 at least H from every vertex of B. Reads binary little-endian PLY (vitamin_e_run's mesh.ply).
 """
+import argparse
 import collections
 import math
 import struct
@@ -48,9 +49,12 @@ def read_vertices(path):
 
 
 def main():
-    if len(sys.argv) != 4:
-        sys.exit(__doc__)
-    a, b, h = read_vertices(sys.argv[1]), read_vertices(sys.argv[2]), float(sys.argv[3])
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("a", help="the mesh whose vertices are measured (PLY)")
+    parser.add_argument("b", help="the mesh they are measured against (PLY)")
+    parser.add_argument("h", type=float, help="cell size and threshold (the mesh's units, e.g. a voxel)")
+    args = parser.parse_args()
+    a, b, h = read_vertices(args.a), read_vertices(args.b), args.h
     if not a or not b or not h > 0:
         sys.exit("mesh_distance: both meshes need vertices and H must be > 0")
     cell = lambda p: tuple(int(math.floor(c / h)) for c in p)
