@@ -127,7 +127,7 @@ TEST(ImuCheck, WrongCameraToImuRotationWarned) {
   Watcher<rosgraph_msgs::Log> rosout(nh, "/rosout", 5000);
   ASSERT_TRUE(right.waitForPublisher(30.0));
   ASSERT_TRUE(wrong.waitForPublisher(30.0));
-  ASSERT_TRUE(rosout.waitForPublisher(30.0));
+  ASSERT_TRUE(rosout.waitForAllPublishers(30.0));
   ASSERT_TRUE(ros::service::waitForService("/player/pause_playback", ros::Duration(30.0)));
   std_srvs::SetBool resume;
   resume.request.data = false;

@@ -233,7 +233,7 @@ TEST_F(BadInput, ErrorsLoggedNoCrash) {
   Watcher<vitamin_e::TrackingStatus> status(nh_, "/tracking/status", 1000);
   Watcher<rosgraph_msgs::Log> rosout(nh_, "/rosout", 1000);
   ASSERT_TRUE(status.waitForPublisher(30.0));
-  ASSERT_TRUE(rosout.waitForPublisher(30.0));
+  ASSERT_TRUE(rosout.waitForAllPublishers(30.0));
   // The tracker subscribes to the image once it runs: wait for it.
   const auto deadline = ros::WallTime::now() + ros::WallDuration(30.0);
   while (image_pub_.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) {
@@ -276,7 +276,7 @@ TEST_F(BadInput, MoreEncodingsAndStamps) {
   Watcher<vitamin_e::TrackingStatus> status(nh_, "/tracking/status", 1000);
   Watcher<rosgraph_msgs::Log> rosout(nh_, "/rosout", 1000);
   ASSERT_TRUE(status.waitForPublisher(30.0));
-  ASSERT_TRUE(rosout.waitForPublisher(30.0));
+  ASSERT_TRUE(rosout.waitForAllPublishers(30.0));
   const auto deadline = ros::WallTime::now() + ros::WallDuration(30.0);
   while (image_pub_.getNumSubscribers() == 0 && ros::WallTime::now() < deadline) ros::WallDuration(0.02).sleep();
   ASSERT_GT(image_pub_.getNumSubscribers(), 0u);
