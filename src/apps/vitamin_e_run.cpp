@@ -501,6 +501,7 @@ int run(const Options& o) {
     const vitamin_e::fusion::TsdfIntegratorStats fused = dense->integratorStats();
     stats.dense_fused = fused.integrated;
     stats.dense_dropped = fused.dropped;
+    stats.dense_raster_downscale = fused.raster_downscale_frames;
     if (fused.integrated > 0) stats.cpu_ms["tsdf"] = fused.integration_cpu_ms;
     if (o.pipelined) stats.cpu_ms["mesh"] = cpu_mesh;
   }

@@ -28,9 +28,10 @@ void TsdfIntegrator::integrateJob(const Job& job) {
   }
   const auto t0 = TimingClock::now();
   const double cpu0 = threadCpuMs();
+  IntegrationStats frame;
   {
     std::lock_guard<std::mutex> lock(volume_mutex_);
-    volume_.integrate(job.mesh, job.T_w_c, job.image);
+    frame = volume_.integrate(job.mesh, job.T_w_c, job.image);
   }
   const double cpu = threadCpuMs() - cpu0;
   const double ms = elapsedMs(t0);
@@ -39,6 +40,7 @@ void TsdfIntegrator::integrateJob(const Job& job) {
   stats_.last_integration_ms = ms;
   stats_.integration_ms += ms;
   stats_.integration_cpu_ms += cpu;
+  ++stats_.raster_downscale_frames[frame.raster_downscale];
 }
 
 void TsdfIntegrator::submit(meshing::FrameMesh mesh, const Eigen::Isometry3d& T_w_c,

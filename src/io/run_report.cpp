@@ -140,7 +140,16 @@ std::string toJson(const RunStats& s) {
     }
     os << (first ? "" : "\n  ") << "},\n";
   }
-  os << "  \"dense\": {\"fused\": " << s.dense_fused << ", \"dropped\": " << s.dense_dropped << "},\n";
+  os << "  \"dense\": {\"fused\": " << s.dense_fused << ", \"dropped\": " << s.dense_dropped
+     << ", \"raster_downscale\": {";
+  {
+    bool first = true;
+    for (const auto& [downscale, frames] : s.dense_raster_downscale) {
+      os << (first ? "" : ", ") << "\"" << downscale << "\": " << frames;
+      first = false;
+    }
+  }
+  os << "}},\n";
   const double fps = s.wall_time_s > 0.0 ? static_cast<double>(s.frames) / s.wall_time_s : 0.0;
   os << "  \"wall_time_s\": " << number(s.wall_time_s) << ",\n";
   os << "  \"fps\": " << number(fps) << ",\n";

@@ -61,6 +61,14 @@ TEST(DenseMapper, FusesNoisyPlaneFramesIntoAFlatMesh) {
   for (const auto& v : mesh.vertices) max_err = std::max(max_err, std::abs(v.z() - 3.0));
   EXPECT_LT(max_err, 0.05) << "a vertex is more than one voxel off the plane";
   EXPECT_EQ(mapper.integratorStats().integrated, 6u);
+  // Every fused frame is counted under the raster size it was fused at.
+  std::size_t counted = 0;
+  for (const auto& [downscale, frames] : mapper.integratorStats().raster_downscale_frames) {
+    EXPECT_GE(downscale, 1);
+    EXPECT_LE(downscale, 16);
+    counted += frames;
+  }
+  EXPECT_EQ(counted, 6u);
 }
 
 TEST(DenseMapper, SkipsFramesWithoutEnoughPointsOrPose) {

@@ -29,6 +29,9 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   s.addCounter("keyframe", 1);
   s.frames_by_state = {{"initializing", 1}, {"tracking", 2}};
   s.frames_by_reason = {{"waiting_for_map", 1}, {"initialized", 1}, {"tracked", 1}};
+  s.dense_fused = 5;
+  s.dense_dropped = 1;
+  s.dense_raster_downscale = {{1, 2}, {3, 3}};
   s.peak_rss_mb = peakRssMb();
   EXPECT_GT(s.peak_rss_mb, 1.0);
   EXPECT_LT(s.peak_rss_mb, 1e5);
@@ -51,6 +54,11 @@ TEST(RunReport, StatsJsonHasEveryFieldWithTheRightValues) {
   EXPECT_EQ(j["frames_by_reason"].size(), 3u);
   EXPECT_EQ(j["frames_by_reason"]["waiting_for_map"].as<int>(), 1);
   EXPECT_FALSE(j["interrupted"].as<bool>());
+  EXPECT_EQ(j["dense"]["fused"].as<int>(), 5);
+  EXPECT_EQ(j["dense"]["dropped"].as<int>(), 1);
+  EXPECT_EQ(j["dense"]["raster_downscale"].size(), 2u);
+  EXPECT_EQ(j["dense"]["raster_downscale"]["1"].as<int>(), 2);
+  EXPECT_EQ(j["dense"]["raster_downscale"]["3"].as<int>(), 3);
   EXPECT_DOUBLE_EQ(j["points_per_frame"]["mean"].as<double>(), 200.0);
   EXPECT_DOUBLE_EQ(j["points_per_frame"]["median"].as<double>(), 200.0);
   EXPECT_DOUBLE_EQ(j["mapped_points_per_frame"]["median"].as<double>(), 120.0);
@@ -88,6 +96,8 @@ TEST(RunReport, EmptyRunIsStillValidJson) {
   EXPECT_TRUE(j["interrupted"].as<bool>());
   EXPECT_TRUE(j["timing_ms"].IsMap());
   EXPECT_EQ(j["timing_ms"].size(), 0u);
+  EXPECT_TRUE(j["dense"]["raster_downscale"].IsMap());
+  EXPECT_EQ(j["dense"]["raster_downscale"].size(), 0u);
 }
 
 TEST(RunReport, WriteFailsCleanlyOnABadPath) {

@@ -5,6 +5,7 @@
 // configured). In synchronous mode submit() integrates immediately. A change
 // of the map's scaling is queued in order with the frames and never dropped.
 // extractMesh() / saveMesh() / takeChangedBlocks() may be called from any thread.
+#include <map>
 #include <memory>
 #include <mutex>
 
@@ -28,6 +29,7 @@ struct TsdfIntegratorStats {
   double last_integration_ms = 0.0;
   double integration_ms = 0.0;      // sum over the integrated frames (wall)
   double integration_cpu_ms = 0.0;  // the same in CPU time of the integrating thread
+  std::map<int, std::size_t> raster_downscale_frames;  // frames integrated at each raster downscale
 };
 
 class TsdfIntegrator {

@@ -38,6 +38,7 @@ struct RunStats {
   std::map<std::string, double> cpu_ms;
   std::size_t dense_fused = 0;    // frame meshes fused into the TSDF
   std::size_t dense_dropped = 0;  // frame meshes the TSDF's queue dropped (it lagged behind)
+  std::map<int, std::size_t> dense_raster_downscale;  // fused frames per TSDF raster downscale
   // Per-frame counters by name (one value per frame that has it: pipeline::FrameDiagnostics),
   // summarized in stats.json as frame_diagnostics {name: {mean, median, min, max, sum}}.
   std::map<std::string, std::vector<double>> frame_counters;
