@@ -167,6 +167,7 @@ void addCounters(const pl::FrameResult& r, io::RunStats* stats) {
     stats->addCounter("mapped_tracks", static_cast<double>(r.num_mapped));
     stats->addCounter("reused", d.reused);
     stats->addCounter("keyframe", d.keyframe ? 1.0 : 0.0);
+    stats->addCounter("window_ba_deferred", d.window_ba_deferred ? 1.0 : 0.0);
     stats->addCounter("candidates", static_cast<double>(d.candidates));
     stats->addCounter("candidate_parallax_deg", d.candidate_parallax_deg);
   }

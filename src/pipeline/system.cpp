@@ -92,6 +92,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
     return result;
   }
   const double tracking_ms = f.tracking_ms;
+  mapper_behind = f.mapper_behind;
   const EndedTracks ended = takeTrackerCounts(&f, &result);
   FrameContext frame = contextOf(std::move(f));
 
@@ -461,7 +462,7 @@ Eigen::Isometry3d System::Impl::extendMap(const FrameContext& frame, Eigen::Isom
                                           const KeyframeDecision& decision, FrameDiagnostics* d) {
   d->keyframe_parallax_px = decision.parallax_px;
   if (decision.needed) {
-    T_w_c = insertKeyframe(frame, T_w_c, d);
+    T_w_c = insertKeyframe(frame, T_w_c, d, mapper_behind);
     if (ground.enabled()) holdGroundScale(frame, T_w_c, d);
   }
   // Median depth of the mapped points in view: the map's scale at this place.
@@ -475,14 +476,18 @@ Eigen::Isometry3d System::Impl::extendMap(const FrameContext& frame, Eigen::Isom
 }
 
 Eigen::Isometry3d System::Impl::insertKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c,
-                                               FrameDiagnostics* d) {
+                                               FrameDiagnostics* d, bool may_defer) {
   map.addKeyframe(Mapper::keyframeOf(frame, T_w_c));
   Triangulation made = mapper.triangulate(frame, map);
   for (const map::NewLandmark& l : made.landmarks) map.addLandmark(l);
   d->keyframe = true;
   d->triangulated = static_cast<int>(made.landmarks.size());
   d->triangulation_rejected_by = std::move(made.rejected_by);
-  applyUpdate(mapper.optimizeWindow(map));
+  // Behind the tracker, the mapper catches up by leaving this window BA to the next keyframe, whose
+  // BA frees this one too (the frame's own BA has refined its pose already).
+  window_ba_deferred = config.defer_keyframe_ba && may_defer && !window_ba_deferred;
+  d->window_ba_deferred = window_ba_deferred;
+  if (!window_ba_deferred) applyUpdate(mapper.optimizeWindow(map));
   // The window BA moved the new keyframe: the frame's pose is the keyframe's.
   Eigen::Isometry3d T_w_kf = map.keyframes().back().T_w_c;
   motion.correctLast(T_w_kf);

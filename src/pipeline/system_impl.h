@@ -67,7 +67,9 @@ struct System::Impl {
                               FrameDiagnostics* d);
   // The frame as a keyframe: triangulation, window BA, relocalizer index.
   // Returns the frame's pose after the window BA.
-  Eigen::Isometry3d insertKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d);
+  // may_defer: the window BA may be left to the next keyframe (the mapper is behind; config.defer_keyframe_ba).
+  Eigen::Isometry3d insertKeyframe(const FrameContext& frame, const Eigen::Isometry3d& T_w_c, FrameDiagnostics* d,
+                                   bool may_defer = false);
   // A loss (kPoseFailed, kPoseJumped; why: the message's detail).
   void lose(FrameContext& frame, RecoveryEvent event, const std::string& why, FrameResult* result);
   // A frame of the relocalizing state.
@@ -120,6 +122,8 @@ struct System::Impl {
   map::Map map;
   MotionModel motion;
   bool initialized_once = false;
+  bool mapper_behind = false;       // this frame's TrackedFrame::mapper_behind
+  bool window_ba_deferred = false;  // the last keyframe left its window BA to the next one
   double scene_depth = 1.0;  // median depth of the map seen from the camera, map units
   // map persistence (system_map_io.cpp)
   bool localization_only = false;  // the map is not changed (System::setLocalizationOnly)

@@ -81,6 +81,7 @@ struct FrameDiagnostics {
   bool init_ambiguous = false;
   // mapping
   bool keyframe = false;              // a keyframe was inserted (the first map's frame counts)
+  bool window_ba_deferred = false;    // its window BA was left to the next keyframe (the mapper was behind)
   double keyframe_parallax_px = 0.0;  // rotation-compensated median parallax to the last keyframe [px]
   std::size_t keyframes = 0;          // keyframes in the window after this frame
   int triangulated = 0;               // new map points made this frame

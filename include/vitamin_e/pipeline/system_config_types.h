@@ -63,6 +63,9 @@ struct SystemConfig {
   int ba_keyframe_sweeps = 5;                 // subspace GN sweeps when a keyframe is inserted
   int ba_frame_sweeps = 3;                    // subspace GN sweeps of the per-frame BA
   int ba_free_keyframes = 4;                  // newest keyframes optimized by the keyframe BA (with their points)
+  bool defer_keyframe_ba = true;              // a keyframe that reaches the mapper while the next frame already
+                                              // waits for it (PipelinedSystem, live) leaves its window BA to the
+                                              // next keyframe, never two in a row; sequential mode never waits
   double ba_free_min_shared = 0.0;            // experimental, 0 = off; > 0: instead, free every keyframe that sees at
                                               // least this share of the newest keyframe's map points (never the gauge)
   double keyframe_parallax_px = 20.0;         // rotation-compensated median parallax to the last keyframe
