@@ -22,6 +22,9 @@
 #              overlap; stats.json cpu_ms (builds that have it) gives the CPU ms per frame of each
 #              thread's stage (a stage's helper threads, e.g. the tracker's stripes, count in cpu/f only)
 #   eff        parallel efficiency: pipelined fps / sequential fps of the same build
+#   ATE        trajectory error [cm] (vitamin_e_evaluate, Sim(3) RMSE) against the clip's ground truth
+#              (groundtruth_cam0_tum.txt or poses.txt in it), when there is one: --pipelined runs
+#              depend on the threads' timing, so their accuracy is measured run by run
 # Last line: JSON with every number. Timing only: accuracy is scripts/evaluate_suite.sh's.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -93,6 +96,10 @@ ve_info "load before: $(cut -d' ' -f1-3 /proc/loadavg); runs in $out"
 for ((i = 1; i <= runs; ++i)); do
   for s in "${sets[@]}"; do
     IFS='|' read -r name path config <<<"$s"
+    gt=""
+    for f in groundtruth_cam0_tum.txt poses.txt; do
+      if [ -f "$path/$f" ]; then gt="$path/$f"; break; fi
+    done
     for mode in $modes; do
       flag=()
       [ "$mode" = pipelined ] && flag=(--pipelined)
@@ -104,6 +111,9 @@ for ((i = 1; i <= runs; ++i)); do
         /usr/bin/time -f "%R %U %S %e" -o "$dir.time" "${bin[$b]}/vitamin_e_run" --dataset "$path" --config "${configs[$b]}/$config" \
           --out "$dir" --quiet "${flag[@]}" "${extra[@]}" >/dev/null 2>"$dir.stderr" \
           || { cat "$dir.stderr" >&2; ve_die "run $dir failed"; }
+        if [ -n "$gt" ] && [ -x "$new/vitamin_e_evaluate" ]; then
+          "$new/vitamin_e_evaluate" "$dir/trajectory.txt" "$gt" 2>/dev/null | tail -n 1 >"$dir.ate.json" || rm -f "$dir.ate.json"
+        fi
         ve_info "$b $name $mode run $i: $(python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print('%d frames in %.1f s' % (s['frames'], s['wall_time_s']))" "$dir/stats.json") (load $(cut -d' ' -f1 /proc/loadavg))"
       done
     done

@@ -51,6 +51,12 @@ def one_run(prefix):
     dense = stats.get("dense")
     if dense:
         run["dense"] = dense
+    # vitamin_e_evaluate's JSON line, when the clip has a ground truth
+    if os.path.exists(prefix + ".ate.json"):
+        try:
+            run["ate_cm"] = 100.0 * json.load(open(prefix + ".ate.json"))["ate_rmse_m"]
+        except (ValueError, KeyError):
+            pass
     return run
 
 
@@ -76,7 +82,7 @@ def main():
         result["sets"][s] = {}
         lines.append(f"== {s} ==")
         head = f"{'build':6} {'mode':10} {'fps':>6} {'rt':>5} {'cpu/f':>6} {'sys/f':>5} {'flt/f':>6} {'eff':>5} |" + "".join(
-            f" {st[:8]:>8}" for st in STAGES) + " | tracked reinit reloc"
+            f" {st[:8]:>8}" for st in STAGES) + " | tracked reinit reloc | ATE cm"
         lines.append(head)
         for b in builds:
             per_mode = {}
@@ -93,6 +99,9 @@ def main():
                 agg["fps_runs"] = [r["fps"] for r in runs]
                 if "dense" in runs[0]:
                     agg["dense"] = [r.get("dense") for r in runs]
+                if all("ate_cm" in r for r in runs):
+                    agg["ate_cm"] = median_of(runs, "ate_cm")
+                    agg["ate_cm_runs"] = [r["ate_cm"] for r in runs]
                 per_mode[m] = agg
             if "sequential" in per_mode and "pipelined" in per_mode and per_mode["sequential"]["fps"] > 0:
                 per_mode["pipelined"]["efficiency"] = per_mode["pipelined"]["fps"] / per_mode["sequential"]["fps"]
@@ -102,7 +111,8 @@ def main():
                 lines.append(f"{b:6} {m:10} {a['fps']:6.1f} {a['rt']:5.2f} {a['cpu_ms_per_frame']:6.1f}"
                              f" {a['sys_ms_per_frame']:5.1f} {a['faults_per_frame']:6.0f} {eff} |{cells}"
                              f" | {'/'.join(map(str, a['tracked']))} of {a['frames']}"
-                             f" {'/'.join(map(str, a['init_retries']))} {'/'.join(map(str, a['relocalizations']))}")
+                             f" {'/'.join(map(str, a['init_retries']))} {'/'.join(map(str, a['relocalizations']))}"
+                             f" | {'/'.join(f'{x:.2f}' for x in a['ate_cm_runs']) if 'ate_cm' in a else '-'}")
                 if a["cpu_ms"]:
                     cpu = ", ".join(f"{k} {v:.2f}" for k, v in a["cpu_ms"].items())
                     lines.append(f"{'':6} {'':10} CPU ms/frame by thread stage: {cpu}")
@@ -114,7 +124,8 @@ def main():
     print("\n".join(lines))
     print("(fps: frames / runner wall time; rt: real-time factor at the camera's rate; cpu/f: process CPU ms per"
           " frame, all threads; sys/f: of it in the kernel; flt/f: minor page faults per frame; eff: pipelined /"
-          " sequential fps; stage columns: mean wall ms per frame)")
+          " sequential fps; stage columns: mean wall ms per frame; ATE cm: each run's Sim(3) RMSE, when the clip has a"
+          " ground truth)")
     print(json.dumps(result))
 
 

@@ -20,12 +20,13 @@ run() {
   "dense": {"fused": 98, "dropped": 0}}\n' "$4" >"$dir/stats.json"
   awk 'BEGIN { for (i = 0; i < 100; ++i) printf "%.1f 0 0 0 0 0 0 1\n", 100 + 0.1 * i }' >"$dir/trajectory.txt"
   echo "${6:-1000} $5 ${7:-0.0} $4" >"$dir.time"
+  [ -z "${8:-}" ] || printf '{"ate_rmse_m":%s,"matched":100}\n' "$8" >"$dir.ate.json"
 }
 # new: sequential 4 s and 5 s (25 and 20 fps: median 22.5), pipelined 2 s twice (50 fps).
 run new sequential 1 4 4.0 2000 0.1
 run new sequential 2 5 4.7 4000 0.2
-run new pipelined 1 2 4.0
-run new pipelined 2 2 4.2
+run new pipelined 1 2 4.0 1000 0.0 0.20
+run new pipelined 2 2 4.2 1000 0.0 0.10
 # base: sequential 5 s, pipelined 4 s (20 and 25 fps).
 run base sequential 1 5 5
 run base sequential 2 5 5
@@ -45,6 +46,9 @@ expect "minor page faults per frame (median)" "30.0" "$(get "round(r['sets']['ki
 expect "kernel CPU ms per frame (median)" "1.5" "$(get "round(r['sets']['kitti']['new']['sequential']['sys_ms_per_frame'], 3)")"
 expect "CPU ms by thread stage" "7.5" "$(get "r['sets']['kitti']['new']['pipelined']['cpu_ms']['mapping']")"
 expect "the table has a row per build and mode" "4" "$(grep -cE '^(new|base) +(sequential|pipelined)' <<<"$out")"
+expect "ATE median over the runs [cm]" "15.0" "$(get "round(r['sets']['kitti']['new']['pipelined']['ate_cm'], 3)")"
+expect "ATE of each run in the table" "1" "$(grep -cE '^new +pipelined .*\| 20\.00/10\.00$' <<<"$out")"
+expect "no ATE without a ground truth" "False" "$(get "'ate_cm' in r['sets']['kitti']['base']['pipelined']")"
 expect "new/base line" "new/base fps, pipelined: 2.00" "$(grep 'new/base fps, pipelined' <<<"$out")"
 
 [ "$fails" = 0 ] || { echo "$fails failure(s)"; exit 1; }
