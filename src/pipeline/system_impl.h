@@ -124,7 +124,7 @@ struct System::Impl {
   bool initialized_once = false;
   bool mapper_behind = false;       // this frame's TrackedFrame::mapper_behind
   bool window_ba_deferred = false;  // the last keyframe left its window BA to the next one
-  double scene_depth = 1.0;  // median depth of the map seen from the camera, map units
+  double scene_depth = 1.0;         // median depth of the map seen from the camera, map units
   // map persistence (system_map_io.cpp)
   bool localization_only = false;  // the map is not changed (System::setLocalizationOnly)
   bool map_loaded = false;         // the map came from loadMap() (a loss is then never given up)

@@ -27,8 +27,8 @@ struct TsdfIntegratorStats {
   std::size_t integrated = 0;
   std::size_t dropped = 0;
   double last_integration_ms = 0.0;
-  double integration_ms = 0.0;      // sum over the integrated frames (wall)
-  double integration_cpu_ms = 0.0;  // the same in CPU time of the integrating thread
+  double integration_ms = 0.0;                         // sum over the integrated frames (wall)
+  double integration_cpu_ms = 0.0;                     // the same in CPU time of the integrating thread
   std::map<int, std::size_t> raster_downscale_frames;  // frames integrated at each raster downscale
 };
 

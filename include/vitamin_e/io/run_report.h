@@ -36,8 +36,8 @@ struct RunStats {
   // CPU ms per processed frame of each stage on its own thread ("image_load", "tracking",
   // "mapping", "mesh", "tsdf"); helper threads (the tracker's stripes) are not in it.
   std::map<std::string, double> cpu_ms;
-  std::size_t dense_fused = 0;    // frame meshes fused into the TSDF
-  std::size_t dense_dropped = 0;  // frame meshes the TSDF's queue dropped (it lagged behind)
+  std::size_t dense_fused = 0;                        // frame meshes fused into the TSDF
+  std::size_t dense_dropped = 0;                      // frame meshes the TSDF's queue dropped (it lagged behind)
   std::map<int, std::size_t> dense_raster_downscale;  // fused frames per TSDF raster downscale
   // Per-frame counters by name (one value per frame that has it: pipeline::FrameDiagnostics),
   // summarized in stats.json as frame_diagnostics {name: {mean, median, min, max, sum}}.
