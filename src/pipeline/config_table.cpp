@@ -235,7 +235,8 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("ba_free_keyframes", &c.ba_free_keyframes, "newest keyframes optimized by the keyframe BA, with their points");
   t.key("defer_keyframe_ba", &c.defer_keyframe_ba,
         "true: in --pipelined mode and live, a keyframe that reaches the mapper while the next frame already "
-        "waits leaves its window BA to the next keyframe (never two in a row); sequential runs never defer");
+        "waits leaves its window BA to the next keyframe (never two in a row, never with ba_free_keyframes 1); "
+        "sequential runs never defer");
   t.key("ba_free_min_shared", &c.ba_free_min_shared,
         "experimental, 0 = off; > 0: the keyframe BA frees instead every keyframe that sees at least this "
         "share of the newest keyframe's map points (never the gauge), [0, 1]; lost KITTI 02's scale from "

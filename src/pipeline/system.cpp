@@ -484,8 +484,10 @@ Eigen::Isometry3d System::Impl::insertKeyframe(const FrameContext& frame, const 
   d->triangulated = static_cast<int>(made.landmarks.size());
   d->triangulation_rejected_by = std::move(made.rejected_by);
   // Behind the tracker, the mapper catches up by leaving this window BA to the next keyframe, whose
-  // BA frees this one too (the frame's own BA has refined its pose already).
-  window_ba_deferred = config.defer_keyframe_ba && may_defer && !window_ba_deferred;
+  // BA frees this one too (the frame's own BA has refined its pose already). With one free keyframe
+  // (and no sharing rule) the next BA would not free it: then never.
+  const bool next_frees_it = config.ba_free_keyframes >= 2 || config.ba_free_min_shared > 0.0;
+  window_ba_deferred = config.defer_keyframe_ba && may_defer && next_frees_it && !window_ba_deferred;
   d->window_ba_deferred = window_ba_deferred;
   if (!window_ba_deferred) applyUpdate(mapper.optimizeWindow(map));
   // The window BA moved the new keyframe: the frame's pose is the keyframe's.

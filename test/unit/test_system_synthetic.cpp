@@ -36,7 +36,7 @@ constexpr int kFrames = 120;
 // mapper_behind: sequential, but every frame reaches the mapping stage as if the next one
 // already waited for it (TrackedFrame::mapper_behind, as PipelinedSystem marks it).
 SyntheticRun runSynthetic(std::uint64_t seed, bool pipelined = false, const std::vector<int>& dropped = {},
-                          bool mapper_behind = false) {
+                          bool mapper_behind = false, const ve::pipeline::SystemConfig& config = {}) {
   ve::synth::SequenceConfig seq;
   seq.frames = kFrames;
   seq.seed = seed;
@@ -51,10 +51,10 @@ SyntheticRun runSynthetic(std::uint64_t seed, bool pipelined = false, const std:
   std::unique_ptr<ve::pipeline::PipelinedSystem> two_threads;
   if (pipelined) {
     two_threads = std::make_unique<ve::pipeline::PipelinedSystem>(
-        ve::pipeline::SystemConfig{}, camera, ve::pipeline::PipelinedOptions{},
+        config, camera, ve::pipeline::PipelinedOptions{},
         [&run](ve::pipeline::FrameResult r) { run.results.push_back(std::move(r)); });
   } else {
-    sequential = std::make_unique<ve::pipeline::System>(ve::pipeline::SystemConfig{}, camera);
+    sequential = std::make_unique<ve::pipeline::System>(config, camera);
   }
   for (int i = 0; i < kFrames; ++i) {
     const double t = static_cast<double>(ve::synth::frameTimestampNs(seq, i)) * 1e-9;
@@ -317,6 +317,19 @@ TEST(SystemSynthetic, MapperBehindDefersEveryOtherWindowBa) {
               keyframes);
   EXPECT_GE(r.matched, static_cast<std::size_t>(0.8 * kFrames));
   EXPECT_LT(r.ate.rmse, 0.00075) << ve::eval::summary(r, cfg);
+}
+
+// With one free keyframe the next keyframe's BA would not optimize a deferred one: nothing defers.
+TEST(SystemSynthetic, MapperBehindDefersNothingWithOneFreeKeyframe) {
+  ve::pipeline::SystemConfig config;
+  config.ba_free_keyframes = 1;
+  const SyntheticRun run = runSynthetic(3, false, {}, true, config);
+  int keyframes = 0;
+  for (const auto& r : run.results) {
+    keyframes += r.diagnostics.keyframe ? 1 : 0;
+    EXPECT_FALSE(r.diagnostics.window_ba_deferred) << "frame " << r.frame_index;
+  }
+  EXPECT_GE(keyframes, 6);
 }
 
 int main(int argc, char** argv) {
