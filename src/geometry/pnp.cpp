@@ -6,6 +6,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <stdexcept>
+#include <utility>
 
 #include "vitamin_e/geometry/lie.h"
 #include "vitamin_e/geometry/projection.h"
@@ -54,59 +55,63 @@ double refinePoseGemanMcClure(const std::vector<Eigen::Vector3d>& p_w, const std
                               Eigen::Isometry3d* T_w_c) {
   const GemanMcClure kernel(sigma_px);
   const camera::Pinhole K{focal_px, focal_px, 0.0, 0.0};  // residuals in pixels: focal_px * normalized
-  auto cost_of = [&](const Eigen::Isometry3d& T) {
+  // One pass gives a pose's cost and its normal equations: the cost decides
+  // whether a step is taken, and a taken step's equations are the next
+  // iteration's, so every point is projected once per pose tried.
+  struct Linearization {
+    double cost = 0.0;
+    Matrix6d H = Matrix6d::Zero();
+    Vector6d g = Vector6d::Zero();
+  };
+  auto linearize = [&](const Eigen::Isometry3d& T, Linearization* lin) {
     const Eigen::Isometry3d T_c_w = T.inverse();
-    double c = 0.0;
+    lin->cost = 0.0;
+    lin->H.setZero();
+    lin->g.setZero();
     for (size_t i = 0; i < p_w.size(); ++i) {
       if (!mask.empty() && !mask[i]) continue;
       const Eigen::Vector3d pc = T_c_w * p_w[i];
       if (pc.z() <= 1e-9) {
-        c += kernel.sigma2;  // behind the camera: saturated
+        lin->cost += kernel.sigma2;  // behind the camera: saturated
         continue;
       }
-      c += kernel.rho((focal_px * xy[i] - K.projectPoint(pc)).squaredNorm());
+      const Eigen::Vector2d r = focal_px * xy[i] - K.projectPoint(pc);
+      const double s = r.squaredNorm();
+      lin->cost += kernel.rho(s);
+      const double w = kernel.weight(s);
+      Matrix26d J;
+      reprojectionJacobians(K, pc, T.linear(), &J, nullptr);
+      lin->H.noalias() += w * J.transpose() * J;
+      lin->g.noalias() += w * J.transpose() * r;
     }
-    return c;
   };
-  double cost = cost_of(*T_w_c);
+  Linearization at;
+  linearize(*T_w_c, &at);
+  Linearization trial;
   double lambda = 1e-6;
   for (int it = 0; it < iterations; ++it) {
-    const Eigen::Isometry3d T_c_w = T_w_c->inverse();
-    Matrix6d H = Matrix6d::Zero();
-    Vector6d g = Vector6d::Zero();
-    for (size_t i = 0; i < p_w.size(); ++i) {
-      if (!mask.empty() && !mask[i]) continue;
-      const Eigen::Vector3d pc = T_c_w * p_w[i];
-      if (pc.z() <= 1e-9) continue;
-      const Eigen::Vector2d r = focal_px * xy[i] - K.projectPoint(pc);
-      const double w = kernel.weight(r.squaredNorm());
-      Matrix26d J;
-      reprojectionJacobians(K, pc, T_w_c->linear(), &J, nullptr);
-      H.noalias() += w * J.transpose() * J;
-      g.noalias() += w * J.transpose() * r;
-    }
     bool improved = false;
     for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
-      Matrix6d Hd = H;
+      Matrix6d Hd = at.H;
       Hd.diagonal() *= (1.0 + lambda);
-      const Vector6d delta = Hd.ldlt().solve(-g);
+      const Vector6d delta = Hd.ldlt().solve(-at.g);
       if (!delta.allFinite()) break;
       const Eigen::Isometry3d T_new = normalizedIsometry(*T_w_c * expSE3(delta));
-      const double c_new = cost_of(T_new);
-      if (c_new <= cost) {
-        const double rel = (cost - c_new) / std::max(cost, 1e-300);
+      linearize(T_new, &trial);
+      if (trial.cost <= at.cost) {
+        const double rel = (at.cost - trial.cost) / std::max(at.cost, 1e-300);
         *T_w_c = T_new;
-        cost = c_new;
+        std::swap(at, trial);
         lambda = std::max(lambda * 0.1, 1e-9);
         improved = true;
-        if (rel < 1e-10 || delta.norm() < 1e-12) return cost;
+        if (rel < 1e-10 || delta.norm() < 1e-12) return at.cost;
       } else {
         lambda *= 10.0;
       }
     }
     if (!improved) break;
   }
-  return cost;
+  return at.cost;
 }
 
 PnpResult solvePnpRansac(const std::vector<Eigen::Vector3d>& p_w, const std::vector<Eigen::Vector2d>& xy,
