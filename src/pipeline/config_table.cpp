@@ -84,9 +84,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("refine_flow", &tk.refine_flow, "refit the flow to the tracked points and track again from it");
   t.key("predict_parallax", &tk.predict_parallax, "add each point's last residual to the flow prediction");
   t.key("retry_from_prior", &tk.retry_from_prior,
-        "experimental; true: a map track the flow lost is tracked again from its map point seen from the "
-        "predicted pose, when that lies outside the flow's inlier band (a second layer after fast motion or "
-        "dropped frames)");
+        "a map track the flow lost is tracked again from its map point seen from the predicted pose (corrected "
+        "by the BRIEF matches around the map tracks), when that lies outside the flow's inlier band (a second "
+        "layer after fast motion or dropped frames)");
   t.key("threads", &tk.threads, "image stripes processed in parallel (1 = serial)");
 
   // --- init (two-view) ---

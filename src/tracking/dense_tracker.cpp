@@ -107,6 +107,7 @@ struct DenseTracker::Impl {
   std::vector<Eigen::Vector2f> prior_uv;
   std::vector<std::uint8_t> has_prior, from_prior;
   std::vector<int> retry;
+  std::vector<Eigen::Vector2d> match_prev, match_cur;  // this frame's BRIEF matches, previous -> this [px]
   bool fromPrior(int i) const { return !from_prior.empty() && from_prior[static_cast<size_t>(i)]; }
 
   explicit Impl(const TrackerConfig& c) : cfg(c), brief(c.brief_patch_size) {}
@@ -260,14 +261,39 @@ void DenseTracker::Impl::retryFromPriors(const Eigen::Matrix2d& A, const Eigen::
   bool any_lost = false;
   for (size_t i = 0; i < tracks.size() && !any_lost; ++i) any_lost = has_prior[i] && !steps[i].ok;
   if (!any_lost) return;
-  // The predicted pose is off by the motion model's error (a turn that starts
-  // or ends): the map tracks the flow kept tell where their priors should have
-  // been; a robust affine from prior to position corrects the rest.
+  // The predicted pose is off by the motion model's error (a turn that starts or ends), the
+  // same for every layer. Each BRIEF match moved as the nearest map track's prior says, up to
+  // that error: a robust affine from those predictions to the matches corrects every prior.
+  // (Not the map tracks the flow kept: where one flow cannot follow two layers most of them
+  // climbed to the wrong extremum; docs/PERFORMANCE.md, "Dropped frames".)
   std::vector<Eigen::Vector2d> xs, ys;
+  const int cell = 16;  // [px]: a match farther than this from every map track is not used
+  const int gw = size.width / cell + 1, gh = size.height / cell + 1;
+  std::vector<std::vector<int>> grid(static_cast<size_t>(gw * gh));
   for (size_t i = 0; i < tracks.size(); ++i) {
-    if (!steps[i].ok || !has_prior[i]) continue;
-    xs.push_back(prior_uv[i].cast<double>());
-    ys.push_back(steps[i].uv.cast<double>());
+    if (!has_prior[i]) continue;
+    const int cx = std::clamp(static_cast<int>(tracks[i].uv.x()) / cell, 0, gw - 1);
+    const int cy = std::clamp(static_cast<int>(tracks[i].uv.y()) / cell, 0, gh - 1);
+    grid[static_cast<size_t>(cy * gw + cx)].push_back(static_cast<int>(i));
+  }
+  for (size_t k = 0; k < match_prev.size(); ++k) {
+    const Eigen::Vector2f q = match_prev[k].cast<float>();
+    const int cx = std::clamp(static_cast<int>(q.x()) / cell, 0, gw - 1);
+    const int cy = std::clamp(static_cast<int>(q.y()) / cell, 0, gh - 1);
+    int best = -1;
+    float best_d2 = static_cast<float>(cell * cell);
+    for (int y = std::max(0, cy - 1); y <= std::min(gh - 1, cy + 1); ++y) {
+      for (int x = std::max(0, cx - 1); x <= std::min(gw - 1, cx + 1); ++x) {
+        for (int i : grid[static_cast<size_t>(y * gw + x)]) {
+          const float d2 = (tracks[static_cast<size_t>(i)].uv - q).squaredNorm();
+          if (d2 < best_d2) best_d2 = d2, best = i;
+        }
+      }
+    }
+    if (best < 0) continue;
+    const size_t t = static_cast<size_t>(best);
+    xs.push_back((q + prior_uv[t] - tracks[t].uv).cast<double>());
+    ys.push_back(match_cur[k]);
   }
   const AffineFitConfig fc{cfg.flow_sigma_start_px, 1.0, 3, std::max(cfg.flow_min_matches, 30)};
   const AffineFit fix = fitAffineGemanMcClure(xs, ys, fc);
@@ -500,6 +526,8 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const st
   extractSmallFeatures(gray, cfg, m.brief, &m.small);
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();  // no flow: identity
+  m.match_prev.clear();
+  m.match_cur.clear();
   if (m.has_prev) {
     MatchConfig mc{cfg.brief_max_distance, cfg.brief_ratio, true};
     const auto pairs = matchBrief(m.prev_small.desc, m.small.desc, mc, &m.prev_small.sign, &m.small.sign);
@@ -510,6 +538,8 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const st
       xs.push_back(m.prev_small.pos[p.first]);
       ys.push_back(m.small.pos[p.second]);
     }
+    m.match_prev = xs;
+    m.match_cur = ys;
     out.flow_matches = static_cast<int>(pairs.size());
     AffineFitConfig fc{cfg.flow_sigma_start_px, cfg.flow_sigma_px, cfg.flow_iterations, cfg.flow_min_matches};
     const AffineFit fit = fitAffineGemanMcClure(xs, ys, fc);

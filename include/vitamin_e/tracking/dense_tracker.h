@@ -102,10 +102,10 @@ struct TrackerConfig {
   bool refine_flow = true;       // refit A, b to the tracked points (GM, down to 1 px) and track again from it
   bool predict_parallax = true;  // add each point's last residual to the dominant flow (x_bar = A x + b + r)
   // a track the flow's prediction lost is tracked once more from its prior (track()'s priors: where the caller's
-  // map and motion model put it), when the prior, corrected by the tracks the flow kept, lies outside the flow's
-  // inlier band (2.5 flow_sigma_px) of that prediction: a second layer that one affine flow cannot follow
-  // (experimental, off: docs/PERFORMANCE.md, "Dropped frames")
-  bool retry_from_prior = false;
+  // map and motion model put it), when the prior, corrected by the BRIEF matches around the map tracks, lies
+  // outside the flow's inlier band (2.5 flow_sigma_px) of that prediction: a second layer that one affine flow
+  // cannot follow (docs/PERFORMANCE.md, "Tracks found again from the map")
+  bool retry_from_prior = true;
   // --- execution ---
   int threads = 2;  // stripes run in parallel (cv::parallel_for_); 1 = serial (>= 1)
 
