@@ -284,7 +284,8 @@ std::vector<Field> configTable(SystemConfig& c) {
         "no measurement when the camera moved more than this x its height in the last frame (> 0): at speed the "
         "road's near points are lost and the far ones bias the plane");
   t.key("reference_keyframes", &g.reference_keyframes,
-        "the first keyframes with a road plane set the height kept (their median, >= 1)");
+        "the first this many consecutive keyframes with a road plane whose heights agree (within max_change of "
+        "their median) set the height kept (their median, >= 1)");
   t.key("window", &g.window, "the map's current height is the median of this many last measurements (>= 1)");
   t.key("tolerance", &g.tolerance,
         "a scale error (reference / current height - 1) within this share is noise: no correction, [0, 1)");
@@ -293,7 +294,8 @@ std::vector<Field> configTable(SystemConfig& c) {
         "their median): disagreeing measurements must be further off to correct (>= 0; 0: fixed tolerance)");
   t.key("gain", &g.gain, "share of the scale error beyond the tolerance corrected at each keyframe, (0, 1]");
   t.key("max_change", &g.max_change,
-        "a plane whose height is off the map's current one by more than this share is not taken for the road, (0, 1)");
+        "a plane whose height is off the map's current one by more than this share is not taken for the road, "
+        "unless `window` consecutive ones agree among themselves (the map's scale moved), (0, 1)");
   t.key("max_tilt_deg", &g.plane.max_tilt_deg,
         "largest angle between the road's normal and the camera's down (y) axis [deg], (0, 90)");
   t.key("min_depression_deg", &g.plane.min_depression_deg,

@@ -6,6 +6,18 @@
 #include "vitamin_e/common/timing.h"
 
 namespace vitamin_e::pipeline {
+namespace {
+
+// Every height within max_change of their median.
+bool agree(const std::vector<double>& heights, double max_change) {
+  const double median = upperMedian(heights);
+  for (double h : heights) {
+    if (std::abs(median / h - 1.0) > max_change) return false;
+  }
+  return true;
+}
+
+}  // namespace
 
 void GroundScaleConfig::validate() const {
   plane.validate();
@@ -25,6 +37,7 @@ GroundScale::GroundScale(const GroundScaleConfig& config) : config_(config) {}
 void GroundScale::reset() {
   first_heights_.clear();
   recent_.clear();
+  rejected_.clear();
   reference_ = 0.0;
 }
 
@@ -39,8 +52,14 @@ ScaleCorrection GroundScale::update(const std::vector<Eigen::Vector3d>& points_c
   c.measured = true;
   c.height = plane.height;
   if (reference_ <= 0.0) {
+    // The first heights that agree among themselves: taken in a turn, while the scale moves
+    // fast, they would hold the map to a scale it had for a moment only.
     first_heights_.push_back(plane.height);
-    if (static_cast<int>(first_heights_.size()) >= config_.reference_keyframes) {
+    if (static_cast<int>(first_heights_.size()) > config_.reference_keyframes) {
+      first_heights_.erase(first_heights_.begin());
+    }
+    if (static_cast<int>(first_heights_.size()) == config_.reference_keyframes &&
+        agree(first_heights_, config_.max_change)) {
       reference_ = upperMedian(first_heights_);
       c.reference = reference_;
     }
@@ -48,8 +67,22 @@ ScaleCorrection GroundScale::update(const std::vector<Eigen::Vector3d>& points_c
   }
   // Compared with the map's current height, not the reference: the map may have drifted further.
   const double current = recent_.empty() ? reference_ : upperMedian(recent_);
-  if (std::abs(current / plane.height - 1.0) > config_.max_change) return c;  // a kerb, a car roof: not the road
-  recent_.push_back(plane.height);
+  if (std::abs(current / plane.height - 1.0) <= config_.max_change) {
+    rejected_.clear();
+    recent_.push_back(plane.height);
+  } else {
+    // A kerb or a car roof for a keyframe or two is not the road. A window of consecutive
+    // heights that agree among themselves is: the map's scale moved past the gate between
+    // two measurements (a turn while the reference was taken), and would never be corrected.
+    rejected_.push_back(plane.height);
+    if (static_cast<int>(rejected_.size()) < config_.window) return c;
+    if (!agree(rejected_, config_.max_change)) {
+      rejected_.erase(rejected_.begin());
+      return c;
+    }
+    recent_ = rejected_;
+    rejected_.clear();
+  }
   if (static_cast<int>(recent_.size()) > config_.window) recent_.erase(recent_.begin());
   if (static_cast<int>(recent_.size()) < config_.window) return c;
   const double median = upperMedian(recent_);

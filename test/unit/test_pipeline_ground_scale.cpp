@@ -1,6 +1,6 @@
 // pipeline::GroundScale: a map whose scale drifts is held to the height of its
-// first keyframes above the road; noise within the tolerance, planes that are
-// not the road and fast frames change nothing.
+// first keyframes above the road that agree; noise within the tolerance, planes
+// that are not the road for a few keyframes and fast frames change nothing.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -90,20 +90,63 @@ TEST(GroundScale, ScatteredHeightsMustBeFurtherOffToCorrect) {
   EXPECT_GT(last_factor(scattered, 0.0), 1.0) << "a fixed tolerance corrects them";
 }
 
+// The map's scale grows 12 % per keyframe just after the reference was taken (a turn): every
+// height is then off the last accepted one by more than max_change. A window of heights that
+// agree among themselves is the map's scale, not a kerb: the correction starts from them instead
+// of ignoring the road for the rest of the run.
+TEST(GroundScale, ScaleThatMovedPastTheGateIsStillCorrected) {
+  GroundScale ground(enabled());
+  double map_scale = 1.0;
+  for (int k = 0; k < 3; ++k) ground.update(roadAt(1.65, k), 0.1);
+  const std::vector<double> jumps = {1.12, 1.03, 1.03, 1.0};  // 1.12 x: past the 10 % gate
+  for (double jump : jumps) {
+    map_scale *= jump;
+    EXPECT_EQ(ground.update(roadAt(1.65 * map_scale, 10), 0.1 * map_scale).factor, 1.0);
+  }
+  double first_factor = 1.0;
+  for (int k = 0; k < 40; ++k) {
+    const ScaleCorrection c = ground.update(roadAt(1.65 * map_scale, 20 + k), 0.1 * map_scale);
+    ASSERT_TRUE(c.measured) << k;
+    if (first_factor == 1.0) first_factor = c.factor;
+    map_scale *= c.factor;
+  }
+  EXPECT_LT(first_factor, 1.0) << "the fifth height off the gate starts the correction";
+  const GroundScaleConfig c = enabled();
+  EXPECT_NEAR(map_scale, 1.0, c.tolerance + 0.01);
+}
+
 TEST(GroundScale, ReferenceIsTheMedianOfTheFirstKeyframes) {
   GroundScale ground(enabled());
-  EXPECT_EQ(ground.update(roadAt(1.0), 0.1).reference, 0.0);
-  EXPECT_EQ(ground.update(roadAt(1.2), 0.1).reference, 0.0);
+  EXPECT_EQ(ground.update(roadAt(1.05), 0.1).reference, 0.0);
+  EXPECT_EQ(ground.update(roadAt(1.15), 0.1).reference, 0.0);
   const ScaleCorrection c = ground.update(roadAt(1.1), 0.1);
   EXPECT_NEAR(c.reference, 1.1, 0.01);
   EXPECT_EQ(c.factor, 1.0);
 }
 
+// The map's scale halves in a turn at the start (KITTI 07 from its frame 30): the reference
+// waits for the first keyframes whose heights agree (within max_change of their median), so the
+// map is not pulled back to a scale it had for a moment.
+TEST(GroundScale, ReferenceWaitsForHeightsThatAgree) {
+  GroundScale ground(enabled());
+  const std::vector<double> turning = {1.8, 1.5, 1.25, 1.07, 0.98, 0.88};
+  for (double h : turning) EXPECT_EQ(ground.update(roadAt(h), 0.1).reference, 0.0) << h;
+  EXPECT_EQ(ground.update(roadAt(0.877), 0.1).reference, 0.0);
+  const ScaleCorrection c = ground.update(roadAt(0.873), 0.1);
+  EXPECT_NEAR(c.reference, 0.877, 0.01);
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(ground.update(roadAt(0.88, k), 0.1).factor, 1.0) << k;
+}
+
 TEST(GroundScale, OtherPlanesFastFramesAndNoRoadAreIgnored) {
   GroundScale ground(enabled());
   for (int k = 0; k < 3; ++k) ground.update(roadAt(1.0, k), 0.1);
-  // A plane 30 % off the map's height (a car roof, a kerb) is not the road.
-  for (int k = 0; k < 10; ++k) EXPECT_EQ(ground.update(roadAt(0.7, k), 0.1).factor, 1.0);
+  // A plane 30 % off the map's height (a car roof, a kerb) is not the road, for fewer keyframes
+  // than a window, and again after a road height between them.
+  const int window = enabled().window;
+  for (int round = 0; round < 3; ++round) {
+    for (int k = 0; k + 1 < window; ++k) EXPECT_EQ(ground.update(roadAt(0.7, k), 0.1).factor, 1.0);
+    EXPECT_EQ(ground.update(roadAt(1.0, round), 0.1).factor, 1.0);
+  }
   // Moving more than max_step_height_ratio x the height per frame: no measurement.
   const ScaleCorrection fast = ground.update(roadAt(1.08), 0.9);
   EXPECT_FALSE(fast.measured);

@@ -6,7 +6,7 @@
 // turn: +20 % in 2 s). A camera on a car keeps its height above the road, so at
 // each keyframe the road plane under the camera (geometry::fitGroundPlane on the
 // frame's map points) measures the map's scale; the map is held to the height of
-// its first keyframes by scaling it, a little at a time, about the camera.
+// its first keyframes that agree by scaling it, a little at a time, about the camera.
 // Off by default: a drone or a hand-held camera has no constant height.
 #include <vector>
 
@@ -25,15 +25,18 @@ struct GroundScaleConfig {
   // Faster than this x the camera height per frame, the road's near points are lost to the
   // image motion and the far ones, triangulated with little parallax, bias the plane: no measurement.
   double max_step_height_ratio = 0.5;
-  int reference_keyframes = 3;  // the first keyframes with a road plane set the height (their median)
-  int window = 5;               // the map's height is the median of the last this many measurements
-  double tolerance = 0.05;      // a scale error within this share is measurement noise: no correction
+  // The first this many consecutive keyframes with a road plane whose heights agree (each within
+  // max_change of their median) set the height: their median.
+  int reference_keyframes = 3;
+  int window = 5;           // the map's height is the median of the last this many measurements
+  double tolerance = 0.05;  // a scale error within this share is measurement noise: no correction
   // The tolerance grows by this x the window's own spread (the median of its heights' relative
   // deviations from their median): measurements that disagree among themselves (a plane that
   // caught a kerb for a few keyframes) must be further off before they correct (0: fixed tolerance).
   double spread_factor = 0.5;
   double gain = 0.5;        // share of the scale error beyond the tolerance corrected per keyframe, (0, 1]
   double max_change = 0.1;  // a height off the map's current one by more than this share is not the road: ignored
+                            // (unless `window` consecutive ones agree among themselves: the map's scale moved)
   void validate() const;    // throws std::invalid_argument naming the key
 };
 
@@ -58,7 +61,8 @@ class GroundScale {
  private:
   GroundScaleConfig config_;
   std::vector<double> first_heights_;
-  std::vector<double> recent_;  // the last `window` accepted heights, in the current scale
+  std::vector<double> recent_;    // the last `window` accepted heights, in the current scale
+  std::vector<double> rejected_;  // consecutive heights off the map's current one (at most `window`)
   double reference_ = 0.0;
 };
 
