@@ -301,7 +301,7 @@ TEST(DenseTracker, PriorsRecoverTheTracksOfASecondLayer) {
 // corrected by them nearly as often as from exact priors.
 TEST(DenseTracker, PriorsAreCorrectedByTheMatchesAroundTheirTracks) {
   const int w = 360, h = 240, split = 240;
-  const auto far_blobs = randomBlobs(600, w, h, 31), near_blobs = randomBlobs(1000, w, h, 32);
+  const auto far_blobs = randomBlobs(600, w, h, 31), near_blobs = randomBlobs(500, w, h, 32);
   const Eigen::Vector2d t_far(3.0, 1.0), t_near(21.0, 2.0);
   const auto two_layers = [&](const Eigen::Vector2d& tf, const Eigen::Vector2d& tn) {
     cv::Mat img = renderBlobs(far_blobs, w, h, Eigen::Matrix2d::Identity(), tf);
