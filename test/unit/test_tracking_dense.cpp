@@ -7,6 +7,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -53,6 +54,29 @@ cv::Mat renderBlobs(const std::vector<Blob>& blobs, int w, int h, const Eigen::M
     }
   }
   return img;
+}
+
+// 600 far blobs over the image and `near_count` near ones right of column `split`, each layer
+// moved by its own translation (near and far structure under a sideways camera motion): the
+// images before and after the motion.
+std::pair<cv::Mat, cv::Mat> twoLayerImages(int w, int h, int split, unsigned seed, int near_count,
+                                           const Eigen::Vector2d& t_far, const Eigen::Vector2d& t_near) {
+  const auto far = randomBlobs(600, w, h, seed), near = randomBlobs(near_count, w, h, seed + 1);
+  const auto render = [&](const Eigen::Vector2d& tf, const Eigen::Vector2d& tn) {
+    cv::Mat img = renderBlobs(far, w, h, Eigen::Matrix2d::Identity(), tf);
+    renderBlobs(near, w, h, Eigen::Matrix2d::Identity(), tn).colRange(split, w).copyTo(img.colRange(split, w));
+    return img;
+  };
+  return {render(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()), render(t_far, t_near)};
+}
+
+// The tracker of the two-layer tests: BRIEF on a third of these small images.
+vt::TrackerConfig twoLayerConfig(bool retry_from_prior) {
+  vt::TrackerConfig cfg;
+  cfg.brief_scale = 1.0 / 3.0;
+  cfg.brief_patch_size = 11;
+  cfg.retry_from_prior = retry_from_prior;
+  return cfg;
 }
 
 Eigen::Matrix2d rotation(double deg) {
@@ -230,29 +254,19 @@ TEST(DenseTracker, TracksWarpedPatternEndToEnd) {
 // frames): the dominant flow follows the larger one and loses the tracks of
 // the other; where the caller knows where each track should be (its map point
 // seen from the predicted pose), those are tracked again from there. The
-// priors share a common error (the motion model's), which the tracks the flow
-// kept correct.
+// priors share a common error (the motion model's), which the BRIEF matches
+// around the mapped tracks correct.
 TEST(DenseTracker, PriorsRecoverTheTracksOfASecondLayer) {
   const int w = 360, h = 240, split = 240;
-  const auto far_blobs = randomBlobs(600, w, h, 21), near_blobs = randomBlobs(300, w, h, 22);
   const Eigen::Vector2d t_far(3.0, 1.0), t_near(21.0, 2.0);
-  const auto two_layers = [&](const Eigen::Vector2d& tf, const Eigen::Vector2d& tn) {
-    cv::Mat img = renderBlobs(far_blobs, w, h, Eigen::Matrix2d::Identity(), tf);
-    renderBlobs(near_blobs, w, h, Eigen::Matrix2d::Identity(), tn).colRange(split, w).copyTo(img.colRange(split, w));
-    return img;
-  };
-  const cv::Mat img0 = two_layers(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
-  const cv::Mat img1 = two_layers(t_far, t_near);
+  const std::pair<cv::Mat, cv::Mat> images = twoLayerImages(w, h, split, 21, 300, t_far, t_near);
+  const cv::Mat &img0 = images.first, &img1 = images.second;
   const Eigen::Vector2f prior_error(2.0f, -1.5f);
   struct Outcome {
     int far_right = 0, far_total = 0, near_right = 0, near_total = 0, from_prior = 0;
   };
   const auto run = [&](bool retry, bool with_priors) {
-    vt::TrackerConfig cfg;
-    cfg.brief_scale = 1.0 / 3.0;
-    cfg.brief_patch_size = 11;
-    cfg.retry_from_prior = retry;
-    vt::DenseTracker tracker(cfg);
+    vt::DenseTracker tracker(twoLayerConfig(retry));
     const auto f0 = tracker.track(img0, 0.0);
     std::vector<vt::TrackPrior> priors;
     std::map<std::uint64_t, Eigen::Vector2f> truth;
@@ -301,21 +315,11 @@ TEST(DenseTracker, PriorsRecoverTheTracksOfASecondLayer) {
 // corrected by them nearly as often as from exact priors.
 TEST(DenseTracker, PriorsAreCorrectedByTheMatchesAroundTheirTracks) {
   const int w = 360, h = 240, split = 240;
-  const auto far_blobs = randomBlobs(600, w, h, 31), near_blobs = randomBlobs(500, w, h, 32);
   const Eigen::Vector2d t_far(3.0, 1.0), t_near(21.0, 2.0);
-  const auto two_layers = [&](const Eigen::Vector2d& tf, const Eigen::Vector2d& tn) {
-    cv::Mat img = renderBlobs(far_blobs, w, h, Eigen::Matrix2d::Identity(), tf);
-    renderBlobs(near_blobs, w, h, Eigen::Matrix2d::Identity(), tn).colRange(split, w).copyTo(img.colRange(split, w));
-    return img;
-  };
-  const cv::Mat img0 = two_layers(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
-  const cv::Mat img1 = two_layers(t_far, t_near);
+  const std::pair<cv::Mat, cv::Mat> images = twoLayerImages(w, h, split, 31, 500, t_far, t_near);
+  const cv::Mat &img0 = images.first, &img1 = images.second;
   const auto near_found = [&](const Eigen::Vector2f& prior_error, int* total) {
-    vt::TrackerConfig cfg;
-    cfg.brief_scale = 1.0 / 3.0;
-    cfg.brief_patch_size = 11;
-    cfg.retry_from_prior = true;
-    vt::DenseTracker tracker(cfg);
+    vt::DenseTracker tracker(twoLayerConfig(true));
     const auto f0 = tracker.track(img0, 0.0);
     std::vector<vt::TrackPrior> priors;
     std::map<std::uint64_t, Eigen::Vector2f> truth;
