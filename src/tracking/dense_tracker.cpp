@@ -269,12 +269,15 @@ void DenseTracker::Impl::retryFromPriors(const Eigen::Matrix2d& A, const Eigen::
   std::vector<Eigen::Vector2d> xs, ys;
   const int cell = 16;  // [px]: a match farther than this from every map track is not used
   const int gw = size.width / cell + 1, gh = size.height / cell + 1;
-  std::vector<std::vector<int>> grid(static_cast<size_t>(gw * gh));
+  const auto at = [gw](int x, int y) {
+    return static_cast<size_t>(y) * static_cast<size_t>(gw) + static_cast<size_t>(x);
+  };
+  std::vector<std::vector<int>> grid(at(0, gh));
   for (size_t i = 0; i < tracks.size(); ++i) {
     if (!has_prior[i]) continue;
     const int cx = std::clamp(static_cast<int>(tracks[i].uv.x()) / cell, 0, gw - 1);
     const int cy = std::clamp(static_cast<int>(tracks[i].uv.y()) / cell, 0, gh - 1);
-    grid[static_cast<size_t>(cy * gw + cx)].push_back(static_cast<int>(i));
+    grid[at(cx, cy)].push_back(static_cast<int>(i));
   }
   for (size_t k = 0; k < match_prev.size(); ++k) {
     const Eigen::Vector2f q = match_prev[k].cast<float>();
@@ -284,7 +287,7 @@ void DenseTracker::Impl::retryFromPriors(const Eigen::Matrix2d& A, const Eigen::
     float best_d2 = static_cast<float>(cell * cell);
     for (int y = std::max(0, cy - 1); y <= std::min(gh - 1, cy + 1); ++y) {
       for (int x = std::max(0, cx - 1); x <= std::min(gw - 1, cx + 1); ++x) {
-        for (int i : grid[static_cast<size_t>(y * gw + x)]) {
+        for (int i : grid[at(x, y)]) {
           const float d2 = (tracks[static_cast<size_t>(i)].uv - q).squaredNorm();
           if (d2 < best_d2) best_d2 = d2, best = i;
         }
