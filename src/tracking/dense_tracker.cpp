@@ -534,18 +534,16 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const st
   if (m.has_prev) {
     MatchConfig mc{cfg.brief_max_distance, cfg.brief_ratio, true};
     const auto pairs = matchBrief(m.prev_small.desc, m.small.desc, mc, &m.prev_small.sign, &m.small.sign);
-    std::vector<Eigen::Vector2d> xs, ys;
-    xs.reserve(pairs.size());
-    ys.reserve(pairs.size());
+    // Kept for the priors' correction (retryFromPriors) as well as fitted here.
+    m.match_prev.reserve(pairs.size());
+    m.match_cur.reserve(pairs.size());
     for (const auto& p : pairs) {
-      xs.push_back(m.prev_small.pos[p.first]);
-      ys.push_back(m.small.pos[p.second]);
+      m.match_prev.push_back(m.prev_small.pos[p.first]);
+      m.match_cur.push_back(m.small.pos[p.second]);
     }
-    m.match_prev = xs;
-    m.match_cur = ys;
     out.flow_matches = static_cast<int>(pairs.size());
     AffineFitConfig fc{cfg.flow_sigma_start_px, cfg.flow_sigma_px, cfg.flow_iterations, cfg.flow_min_matches};
-    const AffineFit fit = fitAffineGemanMcClure(xs, ys, fc);
+    const AffineFit fit = fitAffineGemanMcClure(m.match_prev, m.match_cur, fc);
     if (fit.ok) {
       A = fit.A;
       b = fit.b;
