@@ -486,6 +486,10 @@ std::size_t DenseTracker::dropTracks(const std::vector<std::uint64_t>& ids) {
 }
 
 TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const std::vector<TrackPrior>& priors) {
+  return track(gray, timestamp, PriorProvider([&priors] { return priors; }));
+}
+
+TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const PriorProvider& priors) {
   if (gray.empty()) throw std::invalid_argument("DenseTracker::track: empty image");
   if (gray.type() != CV_8UC1) throw std::invalid_argument("DenseTracker::track: image must be CV_8UC1");
   Impl& m = *impl_;
@@ -565,7 +569,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const st
   m.patch_gain = 1.f;
   m.exposure_step = 0.f;
   if (m.has_prev && !m.tracks.empty() && scale > 0.f) {
-    m.matchPriors(priors);
+    m.from_prior.clear();  // the flow's pass: no track is predicted from a prior
     m.trackAll(A, b, scale);
     if (cfg.refine_flow) {
       // Refit the dominant flow to the tracked extrema (thousands of precise
@@ -592,6 +596,7 @@ TrackerFrame DenseTracker::track(const cv::Mat& gray, double timestamp, const st
     }
     const bool can_align = align && !m.prev_smooth.empty() && m.prev_smooth.size() == m.smooth.size();
     if (can_align) m.alignSteps();
+    m.matchPriors(cfg.retry_from_prior && priors ? priors() : std::vector<TrackPrior>{});
     m.retryFromPriors(A, b, scale, can_align);
     for (int i : m.retry) out.num_from_prior += m.steps[i].ok ? 1 : 0;
     // Two tracks on one pixel: keep the older one.

@@ -256,6 +256,43 @@ TEST(DenseTracker, TracksWarpedPatternEndToEnd) {
 // seen from the predicted pose), those are tracked again from there. The
 // priors share a common error (the motion model's), which the BRIEF matches
 // around the mapped tracks correct.
+// A caller that must wait for its priors (the pipelined system, for the pose of the frame
+// before) is asked for them once per frame, after the flow's pass, and only when the retry is
+// on; what it gives is used as the same priors given up front are.
+TEST(DenseTracker, PriorsAreAskedForOncePerFrameAndOnlyWhenUsed) {
+  const int w = 360, h = 240, split = 240;
+  const Eigen::Vector2d t_far(3.0, 1.0), t_near(21.0, 2.0);
+  const std::pair<cv::Mat, cv::Mat> images = twoLayerImages(w, h, split, 21, 300, t_far, t_near);
+  const auto run = [&](bool retry, bool provider, int* calls) {
+    vt::DenseTracker tracker(twoLayerConfig(retry));
+    const auto f0 = tracker.track(images.first, 0.0, vt::DenseTracker::PriorProvider([calls] {
+                                    ++*calls;
+                                    return std::vector<vt::TrackPrior>{};
+                                  }));
+    std::vector<vt::TrackPrior> priors;
+    for (const auto& p : f0.points) {
+      if (p.uv.x() > split + 10) priors.push_back({p.id, p.uv + t_near.cast<float>()});
+    }
+    if (!provider) return tracker.track(images.second, 0.05, priors);
+    return tracker.track(images.second, 0.05, vt::DenseTracker::PriorProvider([&priors, calls] {
+                           ++*calls;
+                           return priors;
+                         }));
+  };
+  int calls = 0;
+  const auto given = run(true, false, &calls);
+  EXPECT_EQ(calls, 0) << "the first frame has nothing to retry";
+  const auto asked = run(true, true, &calls);
+  EXPECT_EQ(calls, 1);
+  ASSERT_GT(given.num_from_prior, 40);
+  EXPECT_EQ(asked.num_from_prior, given.num_from_prior);
+  ASSERT_EQ(asked.points.size(), given.points.size());
+  for (std::size_t i = 0; i < asked.points.size(); ++i) EXPECT_EQ(asked.points[i].uv, given.points[i].uv);
+  calls = 0;
+  run(false, true, &calls);
+  EXPECT_EQ(calls, 0) << "the retry is off: no caller waits for priors";
+}
+
 TEST(DenseTracker, PriorsRecoverTheTracksOfASecondLayer) {
   const int w = 360, h = 240, split = 240;
   const Eigen::Vector2d t_far(3.0, 1.0), t_near(21.0, 2.0);

@@ -21,6 +21,7 @@
 // on such frames (align_gain).
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -169,6 +170,11 @@ class DenseTracker {
   // differs from the previous one restarts tracking (all points new).
   // priors: expected positions of some tracks in this frame, sorted by id (see retry_from_prior).
   TrackerFrame track(const cv::Mat& gray, double timestamp, const std::vector<TrackPrior>& priors = {});
+  // The same, with the priors asked for only when they are used: after the dominant flow has
+  // tracked every track (only with retry_from_prior). A pipelined caller waits there for the
+  // mapping of the frame before, so that they come from the newest map and pose.
+  using PriorProvider = std::function<std::vector<TrackPrior>()>;
+  TrackerFrame track(const cv::Mat& gray, double timestamp, const PriorProvider& priors);
   // The back end removes outlier tracks: they are not tracked further and their
   // cells are refilled with new points on the next frame. Unknown ids are ignored.
   // Returns the number of tracks removed.
