@@ -23,7 +23,7 @@ FrontEnd::FrontEnd(const tracking::TrackerConfig& config, const camera::Camera& 
     : camera_(camera), tracker_(config) {}
 
 TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
-                             const std::vector<tracking::TrackPrior>& priors) {
+                             const tracking::DenseTracker::PriorProvider& priors) {
   validateImage(image, camera_);
   TrackedFrame f;
   f.timestamp = timestamp;

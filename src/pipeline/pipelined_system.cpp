@@ -22,7 +22,8 @@ PipelinedSystem::PipelinedSystem(std::unique_ptr<System> owned, const PipelinedO
       on_result_(std::move(on_result)),
       on_pose_(std::move(on_pose)),
       input_(options.input_capacity, options.drop_oldest),
-      tracked_(options.tracked_capacity, false) {
+      tracked_(options.tracked_capacity, false),
+      priors_base_(system_->priorsOut()) {
   tracking_thread_ = std::thread([this] { trackingLoop(); });
   mapping_thread_ = std::thread([this] { mappingLoop(); });
 }
@@ -55,7 +56,17 @@ void PipelinedSystem::trackingLoop() {
     TrackedFrame frame;
     const double cpu0 = threadCpuMs();
     try {
-      frame = system_->trackFrame(in->image, in->timestamp, in->timestamp_text);
+      // The tracker's priors wait for the pose of the frame before (not for its keyframe
+      // work): tracks found again from the newest pose, as in the sequential mode; the flow's
+      // pass, most of the tracking, runs beside that mapping.
+      frame = system_->trackFrame(in->image, in->timestamp, in->timestamp_text, [this] {
+        std::uint64_t handed = 0;
+        {
+          std::lock_guard<std::mutex> lock(count_mutex_);
+          handed = handed_;
+        }
+        system_->waitForPriors(priors_base_ + handed);
+      });
     } catch (const std::exception& e) {
       frame.skipped = true;
       frame.timestamp = in->timestamp;
@@ -66,6 +77,7 @@ void PipelinedSystem::trackingLoop() {
       std::lock_guard<std::mutex> lock(count_mutex_);
       cpu_.tracking_ms += cpu;
       tracking_busy_ = false;  // the frame waits for the mapper now
+      ++handed_;
       idle_cv_.notify_all();
     }
     tracked_.push(std::move(frame));

@@ -67,14 +67,17 @@ System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
       recovery({config.relocalization.max_frames, config.min_init_tracks}),
       map(cfg.map) {}
 
-TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  std::shared_ptr<const TrackPriorSource> source;
-  {
-    std::lock_guard<std::mutex> lock(prior_mutex);
-    source = prior_source;
-  }
-  const std::vector<tracking::TrackPrior> priors =
-      source ? predictTrackPositions(*source, camera, timestamp) : std::vector<tracking::TrackPrior>{};
+TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
+                                      const std::function<void()>& before_priors) {
+  const auto priors = [&]() {
+    if (before_priors) before_priors();
+    std::shared_ptr<const TrackPriorSource> source;
+    {
+      std::lock_guard<std::mutex> lock(prior_mutex);
+      source = prior_source;
+    }
+    return source ? predictTrackPositions(*source, camera, timestamp) : std::vector<tracking::TrackPrior>{};
+  };
   TrackedFrame f = front_end.track(image, timestamp, timestamp_text, priors);
   if (!f.skipped) timings.add("tracking", f.tracking_ms);
   return f;
@@ -86,9 +89,11 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
   result.frame_index = f.frame_index - front_end.frameIndexOffset();  // this stream's own count
   result.init_retries = counters.init_retries;
   result.relocalizations = counters.relocalizations;
+  priors_out_early = false;  // a frame before that threw after its early priors: counted once
   if (f.skipped) {
     setOutcome(recovery.apply(RecoveryEvent::kSkipped, {}), &result);
     result.message = std::move(f.message);
+    markPriorsOut();
     return result;
   }
   const double tracking_ms = f.tracking_ms;
@@ -104,12 +109,41 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
   }
   describeFrame(frame, &result);
   publishPriorSource(result);
+  markPriorsOut();
   // total = the work of both stages for this frame (tracking + mapping).
   const double total = tracking_ms + elapsedMs(t_start);
   timings.add("total", total);
   result.timing_ms["total"] = total;
   ++counters.frames_processed;
   return result;
+}
+
+void System::Impl::publishEarlyPriors(const FrameContext& frame) {
+  if (!config.tracker.retry_from_prior) return;
+  auto source = std::make_shared<TrackPriorSource>();
+  source->motion = motion;
+  source->p_w_by_track.reserve(frame.tracks.size());
+  for (const FrameTrack& t : frame.tracks) {
+    if (const map::Landmark* l = map.landmark(t.id)) source->p_w_by_track.emplace_back(t.id, l->p_w);
+  }
+  {
+    std::lock_guard<std::mutex> lock(prior_mutex);
+    prior_source = std::move(source);
+  }
+  markPriorsOut();
+  priors_out_early = true;
+}
+
+void System::Impl::markPriorsOut() {
+  if (priors_out_early) {
+    priors_out_early = false;  // the end of the frame that published early: counted already
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(prior_mutex);
+    ++prior_frames;
+  }
+  prior_cv.notify_all();
 }
 
 void System::Impl::clearPriorSource() {
@@ -393,6 +427,7 @@ void System::Impl::track(FrameContext& frame, const EndedTracks& ended, const Po
   }
   recordPose(frame.timestamp, frame.timestamp_text, T_w_c);
   motion.update(T_w_c, frame.timestamp);
+  publishEarlyPriors(frame);
   KeyframeDecision decision = localization_only ? KeyframeDecision{} : mapper.needKeyframe(frame, T_w_c, map);
   if (pose.weak_kept && !config.keyframe_on_weak_pose) decision.needed = false;
   if (on_pose) {
@@ -592,11 +627,22 @@ System::~System() = default;
 
 FrameResult System::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
                             const PoseListener& on_pose) {
-  return impl_->mapFrame(impl_->trackFrame(image, timestamp, timestamp_text), on_pose);
+  return impl_->mapFrame(impl_->trackFrame(image, timestamp, timestamp_text, {}), on_pose);
 }
 
-TrackedFrame System::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text) {
-  return impl_->trackFrame(image, timestamp, timestamp_text);
+std::uint64_t System::priorsOut() const {
+  std::lock_guard<std::mutex> lock(impl_->prior_mutex);
+  return impl_->prior_frames;
+}
+
+void System::waitForPriors(std::uint64_t n) {
+  std::unique_lock<std::mutex> lock(impl_->prior_mutex);
+  impl_->prior_cv.wait(lock, [&] { return impl_->prior_frames >= n; });
+}
+
+TrackedFrame System::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
+                                const std::function<void()>& before_priors) {
+  return impl_->trackFrame(image, timestamp, timestamp_text, before_priors);
 }
 
 FrameResult System::mapFrame(TrackedFrame&& frame, const PoseListener& on_pose) {

@@ -3,6 +3,7 @@
 // own state, and what the frames share across them (the map, the motion model,
 // the tracking status, the trajectory). The per-frame data travels in a
 // FrameContext from stage to stage.
+#include <condition_variable>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -44,7 +45,8 @@ using EndedTracks = std::vector<std::pair<std::uint64_t, const char*>>;
 struct System::Impl {
   Impl(const SystemConfig& config, const camera::Camera& camera);
 
-  TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text);
+  TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
+                          const std::function<void()>& before_priors);
   FrameResult mapFrame(TrackedFrame&& frame, const PoseListener& on_pose);
   void reset();
   bool restartTracking();
@@ -136,8 +138,15 @@ struct System::Impl {
   StageTimings timings;
   // made by the mapping thread after each frame, read by the tracking thread
   std::mutex prior_mutex;
+  std::condition_variable prior_cv;
   std::shared_ptr<const TrackPriorSource> prior_source;
+  std::uint64_t prior_frames = 0;  // mapFrame calls whose priors are out (early or at their end)
+  bool priors_out_early = false;   // this frame's went out once its pose was found
   void publishPriorSource(const FrameResult& result);
+  // As soon as the frame's pose is found: its map tracks and the motion, before the keyframe's
+  // triangulation and window BA (a pipelined tracker waiting for them goes on meanwhile).
+  void publishEarlyPriors(const FrameContext& frame);
+  void markPriorsOut();  // the frame's priors are out (once per mapFrame call)
   void clearPriorSource();
 };
 

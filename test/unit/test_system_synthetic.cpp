@@ -336,3 +336,38 @@ int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
 }
+
+// The pipelined tracker reads its priors once the frame before has its pose (System::waitForPriors,
+// before the keyframe work): one count per mapped frame, a skipped one (a stamp that does not
+// increase) too, so that no frame leaves the tracker waiting.
+TEST(SystemSynthetic, PriorsAreOutOncePerMappedFrameSkippedOnesToo) {
+  ve::synth::SequenceConfig seq;
+  seq.frames = 40;
+  seq.seed = 3;
+  const ve::camera::Camera camera = ve::synth::makeSequenceCamera(seq.width, seq.height, true);
+  const ve::synth::CameraPath path(ve::synth::makeSequencePath(seq));
+  const ve::synth::Scene scene = ve::synth::makeSequenceScene(seq, path);
+  const ve::synth::Renderer renderer(scene, camera);
+  std::vector<std::pair<cv::Mat, double>> frames;
+  for (int i = 0; i < seq.frames; ++i) {
+    const double t = static_cast<double>(ve::synth::frameTimestampNs(seq, i)) * 1e-9;
+    frames.emplace_back(renderer.render(path.T_w_c(i / seq.rate_hz), {}), t);
+    if (i == 30) frames.emplace_back(frames.back().first, t);  // the same stamp again: skipped
+  }
+
+  ve::pipeline::System system({}, camera);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    system.process(frames[i].first, frames[i].second);
+    EXPECT_EQ(system.priorsOut(), i + 1) << "frame " << i;
+  }
+  EXPECT_GE(system.framesTrackedSinceInit(), 10u);
+
+  std::size_t delivered = 0;
+  ve::pipeline::PipelinedSystem pipelined({}, camera, ve::pipeline::PipelinedOptions{},
+                                          [&delivered](ve::pipeline::FrameResult) { ++delivered; });
+  for (const auto& [image, t] : frames) pipelined.submit(image, t);
+  pipelined.flush();
+  EXPECT_EQ(delivered, frames.size());
+  EXPECT_EQ(pipelined.system().priorsOut(), frames.size());
+  EXPECT_EQ(pipelined.system().relocalizations(), 0);
+}

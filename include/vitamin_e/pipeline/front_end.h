@@ -25,8 +25,9 @@ class FrontEnd {
 
   // Tracks one image (validated: std::invalid_argument). A stamp that is not
   // finite or does not increase gives a skipped frame and leaves the tracker as it was.
+  // priors: asked for by the tracker when it uses them (tracking::DenseTracker::track).
   TrackedFrame track(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
-                     const std::vector<tracking::TrackPrior>& priors = {});
+                     const tracking::DenseTracker::PriorProvider& priors = {});
   // Tracks the mapping stage rejected: they end before the next image is
   // tracked (the same rule in the sequential and the pipelined mode). Thread-safe.
   void dropTracks(const std::vector<std::uint64_t>& ids);

@@ -93,6 +93,8 @@ class PipelinedSystem {
   mutable std::mutex count_mutex_;
   std::condition_variable idle_cv_;
   std::size_t submitted_ = 0, finished_ = 0, dropped_ = 0;
+  std::uint64_t handed_ = 0;                           // frames given to the mapping thread
+  std::uint64_t priors_base_ = 0;                      // system_->priorsOut() before this pipeline's first frame
   bool tracking_busy_ = false, mapping_busy_ = false;  // a stage is on a frame
   StageCpu cpu_;
 };

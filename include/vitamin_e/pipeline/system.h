@@ -58,8 +58,18 @@ class System {
   // trackFrame (tracking, undistortion) and mapFrame (initialization, pose, BA,
   // map). One thread may call each; they share only thread-safe state (the
   // timings and the tracks the mapping stage ends). process() = mapFrame(trackFrame()).
-  TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "");
+  // before_priors (optional) is called on the tracking thread once the flow has tracked the
+  // frame, before the tracker reads its priors (the map points of the last mapped frame seen
+  // from the predicted pose, tracker.retry_from_prior): PipelinedSystem waits there until the
+  // frame before has its pose (waitForPriors), so that the priors start from that pose.
+  TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "",
+                          const std::function<void()>& before_priors = {});
   FrameResult mapFrame(TrackedFrame&& frame, const PoseListener& on_pose = {});
+  // How many mapFrame calls have put out the tracker's priors for the next frame: once the
+  // frame's pose is found (before its keyframe's triangulation and window BA), or at its end.
+  // waitForPriors(n) blocks until n have (PipelinedSystem's before_priors). Thread-safe.
+  std::uint64_t priorsOut() const;
+  void waitForPriors(std::uint64_t n);
 
   // Forgets map and tracks; the trajectory so far is kept.
   void reset();
