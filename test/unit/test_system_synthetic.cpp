@@ -364,7 +364,7 @@ TEST(SystemSynthetic, PriorsAreOutOncePerMappedFrameSkippedOnesToo) {
 
   std::size_t delivered = 0;
   ve::pipeline::PipelinedSystem pipelined({}, camera, ve::pipeline::PipelinedOptions{},
-                                          [&delivered](ve::pipeline::FrameResult) { ++delivered; });
+                                          [&delivered](const ve::pipeline::FrameResult&) { ++delivered; });
   for (const auto& [image, t] : frames) pipelined.submit(image, t);
   pipelined.flush();
   EXPECT_EQ(delivered, frames.size());
