@@ -32,19 +32,35 @@ struct SyntheticRun {
 
 constexpr int kFrames = 120;
 
+// The generator's room sequence: its camera, path, and a renderer of its scene.
+struct RoomSequence {
+  explicit RoomSequence(const ve::synth::SequenceConfig& config)
+      : seq(config),
+        camera(ve::synth::makeSequenceCamera(seq.width, seq.height, true)),
+        path(ve::synth::makeSequencePath(seq)),
+        scene(ve::synth::makeSequenceScene(seq, path)),
+        renderer(scene, camera) {}
+  ve::synth::SequenceConfig seq;
+  ve::camera::Camera camera;
+  ve::synth::CameraPath path;
+  ve::synth::Scene scene;
+  ve::synth::Renderer renderer;
+};
+
 // dropped: frames not given to the system (a camera the SLAM could not keep up with).
 // mapper_behind: sequential, but every frame reaches the mapping stage as if the next one
 // already waited for it (TrackedFrame::mapper_behind, as PipelinedSystem marks it).
 SyntheticRun runSynthetic(std::uint64_t seed, bool pipelined = false, const std::vector<int>& dropped = {},
                           bool mapper_behind = false, const ve::pipeline::SystemConfig& config = {}) {
-  ve::synth::SequenceConfig seq;
-  seq.frames = kFrames;
-  seq.seed = seed;
-  seq.noise_sigma = 1.0;
-  const ve::camera::Camera camera = ve::synth::makeSequenceCamera(seq.width, seq.height, true);
-  const ve::synth::CameraPath path(ve::synth::makeSequencePath(seq));
-  const ve::synth::Scene scene = ve::synth::makeSequenceScene(seq, path);
-  const ve::synth::Renderer renderer(scene, camera);
+  ve::synth::SequenceConfig config_seq;
+  config_seq.frames = kFrames;
+  config_seq.seed = seed;
+  config_seq.noise_sigma = 1.0;
+  const RoomSequence room(config_seq);
+  const ve::synth::SequenceConfig& seq = room.seq;
+  const ve::camera::Camera& camera = room.camera;
+  const ve::synth::CameraPath& path = room.path;
+  const ve::synth::Renderer& renderer = room.renderer;
 
   SyntheticRun run;
   std::unique_ptr<ve::pipeline::System> sequential;
@@ -344,14 +360,12 @@ TEST(SystemSynthetic, PriorsAreOutOncePerMappedFrameSkippedOnesToo) {
   ve::synth::SequenceConfig seq;
   seq.frames = 40;
   seq.seed = 3;
-  const ve::camera::Camera camera = ve::synth::makeSequenceCamera(seq.width, seq.height, true);
-  const ve::synth::CameraPath path(ve::synth::makeSequencePath(seq));
-  const ve::synth::Scene scene = ve::synth::makeSequenceScene(seq, path);
-  const ve::synth::Renderer renderer(scene, camera);
+  const RoomSequence room(seq);
+  const ve::camera::Camera& camera = room.camera;
   std::vector<std::pair<cv::Mat, double>> frames;
   for (int i = 0; i < seq.frames; ++i) {
     const double t = static_cast<double>(ve::synth::frameTimestampNs(seq, i)) * 1e-9;
-    frames.emplace_back(renderer.render(path.T_w_c(i / seq.rate_hz), {}), t);
+    frames.emplace_back(room.renderer.render(room.path.T_w_c(i / seq.rate_hz), {}), t);
     if (i == 30) frames.emplace_back(frames.back().first, t);  // the same stamp again: skipped
   }
 
