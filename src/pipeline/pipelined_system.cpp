@@ -89,6 +89,7 @@ void PipelinedSystem::mappingLoop() {
   while (std::optional<TrackedFrame> frame = tracked_.pop()) {
     setBusy(&mapping_busy_, true);
     frame->mapper_behind = tracked_.size() > 0;
+    frame->priors_awaited = true;  // put out at the pose (System::waitForPriors)
     const double cpu0 = threadCpuMs();
     FrameResult result = system_->mapFrame(std::move(*frame), on_pose_);
     const double cpu = threadCpuMs() - cpu0;

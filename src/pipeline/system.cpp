@@ -98,6 +98,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
   }
   const double tracking_ms = f.tracking_ms;
   mapper_behind = f.mapper_behind;
+  priors_awaited = f.priors_awaited;
   const EndedTracks ended = takeTrackerCounts(&f, &result);
   FrameContext frame = contextOf(std::move(f));
 
@@ -119,7 +120,8 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
 }
 
 void System::Impl::publishEarlyPriors(const FrameContext& frame) {
-  if (!config.tracker.retry_from_prior) return;
+  // Only for a tracker that waits for them: otherwise the frame's end puts them out once.
+  if (!config.tracker.retry_from_prior || !priors_awaited) return;
   auto source = std::make_shared<TrackPriorSource>();
   source->motion = motion;
   source->p_w_by_track.reserve(frame.tracks.size());

@@ -125,6 +125,7 @@ struct System::Impl {
   MotionModel motion;
   bool initialized_once = false;
   bool mapper_behind = false;       // this frame's TrackedFrame::mapper_behind
+  bool priors_awaited = false;      // this frame's TrackedFrame::priors_awaited
   bool window_ba_deferred = false;  // the last keyframe left its window BA to the next one
   double scene_depth = 1.0;         // median depth of the map seen from the camera, map units
   // map persistence (system_map_io.cpp)

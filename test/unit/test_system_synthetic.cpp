@@ -355,7 +355,8 @@ int main(int argc, char** argv) {
 
 // The pipelined tracker reads its priors once the frame before has its pose (System::waitForPriors,
 // before the keyframe work): one count per mapped frame, a skipped one (a stamp that does not
-// increase) too, so that no frame leaves the tracker waiting.
+// increase) too, so that no frame leaves the tracker waiting; put out early only for a tracker
+// that waits for them.
 TEST(SystemSynthetic, PriorsAreOutOncePerMappedFrameSkippedOnesToo) {
   ve::synth::SequenceConfig seq;
   seq.frames = 40;
@@ -369,12 +370,24 @@ TEST(SystemSynthetic, PriorsAreOutOncePerMappedFrameSkippedOnesToo) {
     if (i == 30) frames.emplace_back(frames.back().first, t);  // the same stamp again: skipped
   }
 
-  ve::pipeline::System system({}, camera);
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    system.process(frames[i].first, frames[i].second);
-    EXPECT_EQ(system.priorsOut(), i + 1) << "frame " << i;
+  // Sequential: out at each frame's end. A frame whose next one waits for its priors (as
+  // PipelinedSystem marks them): out by the time its pose is heard, before its keyframe work.
+  for (const bool awaited : {false, true}) {
+    ve::pipeline::System system({}, camera);
+    std::size_t poses_heard = 0, heard_with_priors_out = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      ve::pipeline::TrackedFrame tracked = system.trackFrame(frames[i].first, frames[i].second);
+      tracked.priors_awaited = awaited;
+      system.mapFrame(std::move(tracked), [&](const ve::pipeline::FramePose&) {
+        ++poses_heard;  // priorsOut() is a thread-safe count, not a call into the mapping
+        heard_with_priors_out += system.priorsOut() == i + 1 ? 1 : 0;
+      });
+      EXPECT_EQ(system.priorsOut(), i + 1) << "frame " << i;
+    }
+    EXPECT_GE(system.framesTrackedSinceInit(), 10u);
+    ASSERT_GE(poses_heard, 10u);
+    EXPECT_EQ(heard_with_priors_out, awaited ? poses_heard : 0u) << "awaited " << awaited;
   }
-  EXPECT_GE(system.framesTrackedSinceInit(), 10u);
 
   std::size_t delivered = 0;
   ve::pipeline::PipelinedSystem pipelined({}, camera, ve::pipeline::PipelinedOptions{},

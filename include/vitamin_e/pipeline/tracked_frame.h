@@ -38,7 +38,8 @@ struct TrackedFrame {
   std::map<std::string, int> lost_by;
   std::vector<std::pair<std::uint64_t, const char*>> ended;  // id, reason (static string)
   bool skipped = false;                                      // stamp did not increase: nothing tracked
-  bool mapper_behind = false;  // PipelinedSystem: the next frame was tracked before the mapper took this one
+  bool mapper_behind = false;   // PipelinedSystem: the next frame was tracked before the mapper took this one
+  bool priors_awaited = false;  // PipelinedSystem: the next frame's tracker waits for this one's priors
   std::string message;
 };
 
