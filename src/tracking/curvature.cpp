@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "tracker_internal.h"
@@ -100,12 +101,25 @@ void detectExtrema(const cv::Mat& kappa, int r, float threshold, int border, std
       const float* row = kappa.ptr<float>(y);
       const float* rmx = mx.ptr<float>(y);
       const float* rmn = mn.ptr<float>(y);
-      for (int x = border; x < cols - border; ++x) {
+      const auto check = [&](int x) {
         const float k = row[x];
         if ((k >= threshold && k == rmx[x]) || (k <= -threshold && k == rmn[x])) {
           if (unique(x, y, k)) part.push_back({x, y, k});
         }
+      };
+      int x = border;
+#if CV_SIMD
+      // Most pixels are no candidate: skip a register of them at once (the same pixels, in order).
+      const cv::v_float32 v_thr = cv::vx_setall_f32(threshold), v_neg_thr = cv::vx_setall_f32(-threshold);
+      for (; x + cv::v_float32::nlanes <= cols - border; x += cv::v_float32::nlanes) {
+        const cv::v_float32 k = cv::vx_load(row + x);
+        const cv::v_float32 hit =
+            ((k >= v_thr) & (k == cv::vx_load(rmx + x))) | ((k <= v_neg_thr) & (k == cv::vx_load(rmn + x)));
+        if (!cv::v_check_any(hit)) continue;
+        for (int i = 0; i < cv::v_float32::nlanes; ++i) check(x + i);
       }
+#endif
+      for (; x < cols - border; ++x) check(x);
     }
   };
   if (n == 1) {

@@ -99,6 +99,53 @@ cv::Mat withNoise(const cv::Mat& img, unsigned seed) {
 
 }  // namespace
 
+// detectExtrema against the definition, pixel by pixel: strict window maxima of kappa and of
+// -kappa at or beyond the threshold, row-major. Values quantized to a few levels make ties
+// (plateaus, which are no extremum); odd widths and borders leave a tail after the vector steps.
+TEST(Curvature, ExtremaAreTheStrictWindowMaximaInRowMajorOrder) {
+  cv::RNG rng(7);
+  for (const cv::Size size : {cv::Size(37, 23), cv::Size(64, 48), cv::Size(131, 17)}) {
+    for (const int levels : {5, 1000}) {
+      cv::Mat kappa(size, CV_32FC1);
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
+          kappa.at<float>(y, x) = static_cast<float>(rng.uniform(-levels, levels + 1)) / static_cast<float>(levels);
+        }
+      }
+      for (const int r : {1, 2}) {
+        for (const int border : {0, 3, 5}) {
+          const float threshold = 0.3f;
+          std::vector<vt::Extremum> got;
+          vt::detectExtrema(kappa, r, threshold, border, &got);
+          std::vector<vt::Extremum> want;
+          const int b = std::max(border, r + 1);
+          for (int y = b; y < size.height - b; ++y) {
+            for (int x = b; x < size.width - b; ++x) {
+              const float k = kappa.at<float>(y, x);
+              if (std::fabs(k) < threshold) continue;
+              bool strict = true;
+              for (int dy = -r; dy <= r && strict; ++dy) {
+                for (int dx = -r; dx <= r && strict; ++dx) {
+                  if (dx == 0 && dy == 0) continue;
+                  const float v = kappa.at<float>(y + dy, x + dx);
+                  strict = k > 0.f ? v < k : v > k;
+                }
+              }
+              if (strict) want.push_back({x, y, k});
+            }
+          }
+          ASSERT_EQ(got.size(), want.size()) << size << " levels " << levels << " r " << r << " border " << border;
+          for (std::size_t i = 0; i < want.size(); ++i) {
+            EXPECT_EQ(got[i].x, want[i].x);
+            EXPECT_EQ(got[i].y, want[i].y);
+            EXPECT_EQ(got[i].kappa, want[i].kappa);
+          }
+        }
+      }
+    }
+  }
+}
+
 // kappa = f'(r)^3 / r for a radial profile: for a bright Gaussian blob it is
 // zero at the centre and most negative on the ring r = s*sqrt(2/3) (s includes
 // the pre-smoothing). The extrema must lie on that ring, centred on the blob.
