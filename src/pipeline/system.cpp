@@ -122,16 +122,10 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
 void System::Impl::publishEarlyPriors(const FrameContext& frame) {
   // Only for a tracker that waits for them: otherwise the frame's end puts them out once.
   if (!config.tracker.retry_from_prior || !priors_awaited) return;
-  auto source = std::make_shared<TrackPriorSource>();
-  source->motion = motion;
-  source->p_w_by_track.reserve(frame.tracks.size());
-  for (const FrameTrack& t : frame.tracks) {
-    if (const map::Landmark* l = map.landmark(t.id)) source->p_w_by_track.emplace_back(t.id, l->p_w);
-  }
-  {
-    std::lock_guard<std::mutex> lock(prior_mutex);
-    prior_source = std::move(source);
-  }
+  std::vector<std::uint64_t> ids;
+  ids.reserve(frame.tracks.size());
+  for (const FrameTrack& t : frame.tracks) ids.push_back(t.id);
+  setPriorSource(priorSourceOf(ids));
   markPriorsOut();
   priors_out_early = true;
 }
@@ -148,26 +142,28 @@ void System::Impl::markPriorsOut() {
   prior_cv.notify_all();
 }
 
-void System::Impl::clearPriorSource() {
+void System::Impl::clearPriorSource() { setPriorSource(nullptr); }
+
+void System::Impl::setPriorSource(std::shared_ptr<const TrackPriorSource> source) {
   std::lock_guard<std::mutex> lock(prior_mutex);
-  prior_source.reset();
+  prior_source = std::move(source);
+}
+
+std::shared_ptr<const TrackPriorSource> System::Impl::priorSourceOf(const std::vector<std::uint64_t>& ids) const {
+  auto source = std::make_shared<TrackPriorSource>();
+  source->motion = motion;
+  source->p_w_by_track.reserve(ids.size());
+  for (std::uint64_t id : ids) {
+    if (const map::Landmark* l = map.landmark(id)) source->p_w_by_track.emplace_back(id, l->p_w);
+  }
+  return source;
 }
 
 // The tracker's priors for the next frame come from this frame's map tracks
 // and motion (tracker.retry_from_prior); none while the camera is not tracked.
 void System::Impl::publishPriorSource(const FrameResult& result) {
-  std::shared_ptr<TrackPriorSource> source;
-  if (result.pose_valid && motion.valid() && recovery.state() == TrackingState::kTracking &&
-      config.tracker.retry_from_prior) {
-    source = std::make_shared<TrackPriorSource>();
-    source->motion = motion;
-    source->p_w_by_track.reserve(prev_mapped_ids.size());
-    for (std::uint64_t id : prev_mapped_ids) {
-      if (const map::Landmark* l = map.landmark(id)) source->p_w_by_track.emplace_back(id, l->p_w);
-    }
-  }
-  std::lock_guard<std::mutex> lock(prior_mutex);
-  prior_source = std::move(source);
+  const bool tracking = result.pose_valid && motion.valid() && recovery.state() == TrackingState::kTracking;
+  setPriorSource(tracking && config.tracker.retry_from_prior ? priorSourceOf(prev_mapped_ids) : nullptr);
 }
 
 void System::Impl::describeFrame(const FrameContext& frame, FrameResult* result) {

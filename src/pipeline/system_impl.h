@@ -149,6 +149,9 @@ struct System::Impl {
   void publishEarlyPriors(const FrameContext& frame);
   void markPriorsOut();  // the frame's priors are out (once per mapFrame call)
   void clearPriorSource();
+  void setPriorSource(std::shared_ptr<const TrackPriorSource> source);  // under prior_mutex
+  // The motion and the map points of these tracks (sorted ids; tracks without one are left out).
+  std::shared_ptr<const TrackPriorSource> priorSourceOf(const std::vector<std::uint64_t>& ids) const;
 };
 
 }  // namespace vitamin_e::pipeline
