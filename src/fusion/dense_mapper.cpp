@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "vitamin_e/common/thread_priority.h"
 #include "vitamin_e/common/timing.h"
 
 namespace vitamin_e::fusion {
@@ -21,13 +22,27 @@ void DenseMapperConfig::validate() const {
   nltgv.validate();
   integrator.validate();
   if (min_points < 3) throw std::invalid_argument("dense.min_points must be >= 3");
+  if (nice_increment < 0 || nice_increment > kMaxNice) {
+    throw std::invalid_argument("dense.nice_increment must be in [0, 19]");
+  }
 }
 
+namespace {
+// The members that use the configuration (the meshing thread's priority) see a checked one.
+const DenseMapperConfig& validated(const DenseMapperConfig& config) {
+  config.validate();
+  return config;
+}
+}  // namespace
+
 DenseMapper::DenseMapper(const DenseMapperConfig& config, const meshing::PinholeImage& image)
-    : config_(config), image_(image), mesher_(config.mesher), pruner_(config.prune), denoiser_(config.nltgv) {
-  config_.validate();
+    : config_(validated(config)),
+      image_(image),
+      mesher_(config.mesher),
+      pruner_(config.prune),
+      denoiser_(config.nltgv) {
   image_.validate();
-  integrator_ = std::make_unique<TsdfIntegrator>(config_.integrator);
+  integrator_ = std::make_unique<TsdfIntegrator>(config_.integrator, config_.nice_increment);
 }
 
 DenseFrameStats DenseMapper::addFrame(const DenseFrame& frame) {

@@ -11,12 +11,13 @@ void TsdfIntegratorConfig::validate() const {
   if (queue_capacity < 1) throw std::invalid_argument("tsdf_integrator.queue_capacity: must be >= 1");
 }
 
-TsdfIntegrator::TsdfIntegrator(const TsdfIntegratorConfig& config) : config_(config), volume_(config.tsdf) {
+TsdfIntegrator::TsdfIntegrator(const TsdfIntegratorConfig& config, int nice_increment)
+    : config_(config), volume_(config.tsdf) {
   config_.validate();
   if (config_.asynchronous) {
     // Frames take the queue's places; a scaling is small and must not be lost.
     worker_ = std::make_unique<SerialWorker<Job>>([this](Job& job) { integrateJob(job); },
-                                                  [](const Job& job) { return !job.is_scaling; });
+                                                  [](const Job& job) { return !job.is_scaling; }, nice_increment);
   }
 }
 

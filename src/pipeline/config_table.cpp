@@ -315,6 +315,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("enabled", &c.dense_enabled, "run the dense reconstruction (vitamin_e_run writes mesh.ply)");
   t.key("denoise", &d.denoise, "NLTGV2-L1 smoothing of each frame mesh before fusion");
   t.key("min_points", &d.min_points, "frames with fewer triangulated points are not meshed (>= 3)");
+  t.key("nice_increment", &d.nice_increment,
+        "the meshing and fusion threads run this many nice levels below the SLAM's (Linux), [0, 19]: they take the "
+        "time the SLAM's threads leave on the cores; 0: the same priority");
   t.shared("min_depth", std::vector<double*>{&d.mesher.min_depth, &d.prune.min_depth, &tsdf.min_depth},
            "nearer points are not meshed and nearer depths not fused (map units)");
   t.shared("max_depth", std::vector<double*>{&d.mesher.max_depth, &d.prune.max_depth, &tsdf.max_depth},

@@ -1,15 +1,19 @@
 // SerialWorker: jobs run on one other thread in the order posted; a full line waits or drops
 // its oldest counted job, never an uncounted one; clear() and the destructor. A gate holds the
-// worker in its first job, so that what waits is known without any timing.
+// worker in its first job, so that what waits is known without any timing. The worker thread's
+// priority: the given nice levels below the poster's.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <future>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
 #include "vitamin_e/common/serial_worker.h"
+#include "vitamin_e/common/thread_priority.h"
 
 namespace {
 
@@ -117,6 +121,24 @@ TEST(SerialWorker, WithoutAPostThereIsNoThreadAndNothingToWaitFor) {
   EXPECT_EQ(worker->clear(), 0u);
   worker.reset();
   EXPECT_TRUE(r.taken().empty());
+}
+
+// The dense stages' threads yield the cores to the SLAM's: the worker runs its jobs the given
+// number of nice levels below the thread that posted first (at most 19), 0 leaves it alone.
+TEST(SerialWorker, RunsItsJobsTheGivenNiceLevelsBelowThePoster) {
+  const int poster = vitamin_e::currentThreadNice();
+  for (const int increment : {0, 3, 19}) {
+    int seen = -100;
+    {
+      SerialWorker<int> worker([&seen](int&) { seen = vitamin_e::currentThreadNice(); }, {}, increment);
+      worker.post(1, 1, WhenFull::kWait);
+      worker.waitIdle();
+    }
+    EXPECT_EQ(seen, std::min(vitamin_e::kMaxNice, poster + increment)) << increment;
+  }
+  EXPECT_EQ(vitamin_e::currentThreadNice(), poster);  // the poster's own priority is untouched
+  EXPECT_THROW(SerialWorker<int>([](int&) {}, {}, -1), std::invalid_argument);
+  EXPECT_THROW(SerialWorker<int>([](int&) {}, {}, 20), std::invalid_argument);
 }
 
 }  // namespace

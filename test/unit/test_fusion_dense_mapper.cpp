@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "vitamin_e/fusion/dense_mapper.h"
 
@@ -119,6 +121,19 @@ TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
   EXPECT_EQ(threaded.integratorStats().dropped, 0u);
   ids.pop_back();
   EXPECT_THROW(threaded.submitFrame(denseFrame(ids, p_c, Eigen::Isometry3d::Identity())), std::invalid_argument);
+}
+
+TEST(DenseMapper, RefusesANiceIncrementOutsideItsRangeNamingTheKey) {
+  for (const int increment : {-1, 20}) {
+    fusion::DenseMapperConfig cfg;
+    cfg.nice_increment = increment;
+    try {
+      fusion::DenseMapper mapper(cfg, image());
+      ADD_FAILURE() << increment << " was taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("dense.nice_increment"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(DenseMapper, ResetDropsWaitingFramesAndKeepsWorking) {

@@ -3,16 +3,20 @@
 // stages' way off the caller's thread (DenseMapper's meshing, TsdfIntegrator's fusion).
 // A job may count against the capacity of the waiting line (frames) or not (small jobs that
 // must never be lost, such as a change of scale); when the line is full, post() waits for a
-// place or drops the oldest counted job. The thread starts at the first post(); the
-// destructor runs what is still waiting, then joins.
+// place or drops the oldest counted job. The thread starts at the first post(), optionally at a
+// lower priority than the poster's (lowerCurrentThreadPriority); the destructor runs what is
+// still waiting, then joins.
 #include <algorithm>
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
 #include <functional>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 #include <utility>
+
+#include "vitamin_e/common/thread_priority.h"
 
 namespace vitamin_e {
 
@@ -25,8 +29,10 @@ class SerialWorker {
   using Counts = std::function<bool(const Job&)>;
 
   // `run` is called on the worker thread; `counts` says which jobs take a place in the line
-  // (empty: all of them).
-  explicit SerialWorker(Run run, Counts counts = {}) : run_(std::move(run)), counts_(std::move(counts)) {}
+  // (empty: all of them); the worker thread runs `nice_increment` nice levels below the thread
+  // of the first post() (lowerCurrentThreadPriority; throws std::invalid_argument outside [0, 19]).
+  explicit SerialWorker(Run run, Counts counts = {}, int nice_increment = 0)
+      : run_(std::move(run)), counts_(std::move(counts)), nice_increment_(checkedNiceIncrement(nice_increment)) {}
   ~SerialWorker() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -80,6 +86,12 @@ class SerialWorker {
   }
 
  private:
+  static int checkedNiceIncrement(int increment) {
+    if (increment < 0 || increment > kMaxNice) {
+      throw std::invalid_argument("SerialWorker: the nice increment must be in [0, 19]");
+    }
+    return increment;
+  }
   bool counts(const Job& job) const { return !counts_ || counts_(job); }
   std::size_t countedWaiting() const {
     return static_cast<std::size_t>(
@@ -87,6 +99,8 @@ class SerialWorker {
   }
 
   void loop() {
+    // Not being allowed to lower its priority (another system) costs only the reason for it.
+    lowerCurrentThreadPriority(nice_increment_);
     for (;;) {
       Job job;
       {
@@ -109,6 +123,7 @@ class SerialWorker {
 
   const Run run_;
   const Counts counts_;
+  const int nice_increment_;
   std::mutex mutex_;
   std::condition_variable posted_;   // a job arrived, or stop
   std::condition_variable changed_;  // a job was taken or finished, or the line was cleared

@@ -38,7 +38,10 @@ struct DenseMapperConfig {
   meshing::NltgvConfig nltgv;
   bool denoise = true;  // NLTGV smoothing of each frame mesh before fusion
   TsdfIntegratorConfig integrator;
-  int min_points = 30;    // frames with fewer triangulated points are not meshed
+  int min_points = 30;  // frames with fewer triangulated points are not meshed
+  // The meshing and fusion threads run this many nice levels below the thread that starts them
+  // (the SLAM's), [0, 19]: they take the time the SLAM leaves on the cores (their queues wait).
+  int nice_increment = 10;
   void validate() const;  // throws std::invalid_argument naming the key
 };
 
@@ -129,7 +132,9 @@ class DenseMapper {
   MapScaling input_scaling_;  // DenseFrame::map_scaling of the last frame
   // The meshing thread of submitFrame() (started at the first frame); declared last: it
   // finishes and joins before the members it uses are destroyed.
-  SerialWorker<DenseFrame> mesh_worker_{[this](DenseFrame& frame) { meshSubmitted(frame); }};
+  SerialWorker<DenseFrame> mesh_worker_{[this](DenseFrame& frame) { meshSubmitted(frame); },
+                                        {},
+                                        config_.nice_increment};
 };
 
 }  // namespace vitamin_e::fusion

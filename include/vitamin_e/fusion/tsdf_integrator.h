@@ -34,7 +34,9 @@ struct TsdfIntegratorStats {
 
 class TsdfIntegrator {
  public:
-  explicit TsdfIntegrator(const TsdfIntegratorConfig& config = {});
+  // The fusion thread runs `nice_increment` nice levels below the thread that starts it
+  // (lowerCurrentThreadPriority; DenseMapperConfig::nice_increment).
+  explicit TsdfIntegrator(const TsdfIntegratorConfig& config = {}, int nice_increment = 0);
   ~TsdfIntegrator() = default;  // the worker finishes the queued frames, then joins
   TsdfIntegrator(const TsdfIntegrator&) = delete;
   TsdfIntegrator& operator=(const TsdfIntegrator&) = delete;
