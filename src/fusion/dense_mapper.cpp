@@ -29,7 +29,7 @@ void DenseMapperConfig::validate() const {
 
 namespace {
 // The members that use the configuration (the meshing thread's priority) see a checked one.
-const DenseMapperConfig& validated(const DenseMapperConfig& config) {
+DenseMapperConfig validated(const DenseMapperConfig& config) {
   config.validate();
   return config;
 }
