@@ -262,6 +262,9 @@ std::vector<Field> configTable(SystemConfig& c) {
   t.key("enabled", &r.enabled, "false: a loss re-initializes at once (a new map)");
   t.key("max_frames", &r.max_frames, "frames with features, lost and not relocalized, before re-initializing");
   t.key("max_keyframes", &r.max_keyframes, "keyframes indexed; the oldest are dropped");
+  t.key("max_shared_points", &r.max_shared_points,
+        "a keyframe that still sees more than this share of the newest indexed keyframe's points is not indexed "
+        "(a near copy), [0, 1]; 1: every keyframe");
   t.key("points_per_keyframe", &r.points_per_keyframe, "described map points kept per keyframe, spread over the image");
   t.key("query_points", &r.query_points, "tracks of a lost frame described, spread over the image");
   t.key("candidates", &r.candidates,

@@ -17,6 +17,7 @@ void RelocalizerConfig::validate() const {
   check(max_frames >= 1, "max_frames must be >= 1");
   check(max_keyframes >= 1, "max_keyframes must be >= 1");
   check(points_per_keyframe >= 10, "points_per_keyframe must be >= 10");
+  check(max_shared_points >= 0.0 && max_shared_points <= 1.0, "max_shared_points must be in [0, 1]");
   check(query_points >= 10, "query_points must be >= 10");
   check(candidates >= 1, "candidates must be >= 1");
   check(patch_size >= 7 && patch_size % 2 == 1, "patch_size must be odd and >= 7");
@@ -188,9 +189,9 @@ void Relocalizer::rescale(const Eigen::Vector3d& centre_w, double factor) {
   }
 }
 
-void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, const map::Map& map,
+bool Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, const map::Map& map,
                               const Eigen::Isometry3d& T_w_c) {
-  if (!config_.enabled || image.empty()) return;
+  if (!config_.enabled || image.empty()) return false;
   Entry e;
   e.frame_index = frame.frame_index;
   e.T_w_c = T_w_c;
@@ -200,6 +201,7 @@ void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, c
     landmarks[i] = map.landmark(frame.tracks[i].id);
     mapped[i] = landmarks[i] != nullptr;
   }
+  if (config_.max_shared_points < 1.0 && sharedWithNewest(landmarks) > config_.max_shared_points) return false;
   const cv::Mat smoothed = smooth(image);
   for (std::size_t i : spread(frame, mapped, config_.points_per_keyframe)) {
     const FrameTrack& t = frame.tracks[i];
@@ -214,7 +216,7 @@ void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, c
     e.polarities.push_back(p.polarity);
     e.points.push_back(p);
   }
-  if (e.points.size() < static_cast<std::size_t>(config_.min_inliers)) return;
+  if (e.points.size() < static_cast<std::size_t>(config_.min_inliers)) return false;
   // Serials only for entries kept: relocalize() finds an entry at serial - first serial.
   e.serial = next_serial_++;
   hashEntry(e, true);
@@ -223,6 +225,22 @@ void Relocalizer::addKeyframe(const cv::Mat& image, const FrameContext& frame, c
     hashEntry(entries_.front(), false);
     entries_.pop_front();
   }
+  return true;
+}
+
+double Relocalizer::sharedWithNewest(const std::vector<const map::Landmark*>& landmarks) const {
+  if (entries_.empty() || entries_.back().points.empty()) return 0.0;
+  std::vector<std::uint64_t> seen;
+  seen.reserve(landmarks.size());
+  for (const map::Landmark* l : landmarks) {
+    if (l != nullptr) seen.push_back(l->id);
+  }
+  std::sort(seen.begin(), seen.end());
+  std::size_t shared = 0;
+  for (const Point& p : entries_.back().points) {
+    if (std::binary_search(seen.begin(), seen.end(), p.landmark_id)) ++shared;
+  }
+  return static_cast<double>(shared) / static_cast<double>(entries_.back().points.size());
 }
 
 Relocalization Relocalizer::relocalize(const cv::Mat& image, const FrameContext& frame, const map::Map& map) const {

@@ -268,6 +268,28 @@ TEST(Relocalizer, ARescaleMovesTheIndexedKeyframesAndPointsWithTheMap) {
   }
 }
 
+// A car's keyframes a metre apart see most of the same points: indexing each of them costs a
+// blur and BRIEF per keyframe and fills the index with near copies. A keyframe that still sees
+// most of the newest entry's points is left out; one that sees other points is indexed.
+TEST(Relocalizer, AKeyframeThatStillSeesMostOfTheNewestEntryIsNotIndexed) {
+  for (const double max_shared : {1.0, 0.7}) {
+    RelocalizerConfig config;
+    config.max_shared_points = max_shared;
+    ve::map::Map map;
+    Relocalizer relocalizer(config, world().camera, pnpConfig());
+    indexKeyframe(cameraAt(0.0, 0.0, 0.0), 1, &map, &relocalizer);
+    ASSERT_EQ(relocalizer.size(), 1u);
+    // The same view again: the same tracks, so every point of the newest entry.
+    const FrameContext again = world().detect(world().render(cameraAt(0.0, 0.0, 0.0), 1), 1);
+    const bool indexed = relocalizer.addKeyframe(again.image, again, map, cameraAt(0.0, 0.0, 0.0));
+    EXPECT_EQ(indexed, max_shared == 1.0) << max_shared;
+    EXPECT_EQ(relocalizer.size(), max_shared == 1.0 ? 2u : 1u) << max_shared;
+    // The opposite wall: none of the newest entry's points.
+    indexKeyframe(cameraAt(0.0, 0.0, M_PI), 2, &map, &relocalizer);
+    EXPECT_EQ(relocalizer.size(), max_shared == 1.0 ? 3u : 2u) << max_shared;
+  }
+}
+
 TEST(Relocalizer, RejectsBadConfig) {
   RelocalizerConfig c;
   c.patch_size = 8;
@@ -277,6 +299,9 @@ TEST(Relocalizer, RejectsBadConfig) {
   EXPECT_THROW(c.validate(), std::invalid_argument);
   c = RelocalizerConfig{};
   c.ratio = 0.0;
+  EXPECT_THROW(c.validate(), std::invalid_argument);
+  c = RelocalizerConfig{};
+  c.max_shared_points = 1.5;
   EXPECT_THROW(c.validate(), std::invalid_argument);
 }
 

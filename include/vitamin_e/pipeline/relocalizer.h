@@ -1,8 +1,9 @@
 #pragma once
 // Relocalization: finds the camera in the existing map after tracking was lost,
 // so that the trajectory goes on in the same world frame and at the same scale
-// instead of in a new map. Every keyframe is indexed by BRIEF descriptors of its
-// mapped points at full resolution, hashed into a few tables of descriptor bits
+// instead of in a new map. Keyframes are indexed by BRIEF descriptors of their
+// mapped points at full resolution (a keyframe that still sees most of the newest
+// indexed one's points is left out), hashed into a few tables of descriptor bits
 // (locality-sensitive hashing: a true match shares all bits of a key often
 // enough). A lost frame's tracks vote for the keyframes they collide with, in
 // the frame's own orientation and turned upside down; the newest and the
@@ -28,9 +29,13 @@
 namespace vitamin_e::pipeline {
 
 struct RelocalizerConfig {
-  bool enabled = true;             // false: a loss re-initializes at once (a new map)
-  int max_frames = 30;             // frames with features, lost and not relocalized, before re-initializing (>= 1)
-  int max_keyframes = 400;         // keyframes indexed; the oldest are dropped (>= 1)
+  bool enabled = true;      // false: a loss re-initializes at once (a new map)
+  int max_frames = 30;      // frames with features, lost and not relocalized, before re-initializing (>= 1)
+  int max_keyframes = 400;  // keyframes indexed; the oldest are dropped (>= 1)
+  // A keyframe is not indexed when it still sees more than this share of the newest indexed
+  // keyframe's points (a near copy: the CPU of describing it, and a place of the index taken
+  // from an older part of the map), [0, 1]; 1: every keyframe.
+  double max_shared_points = 0.7;
   int points_per_keyframe = 1500;  // described map points kept per keyframe, spread over the image (>= 10)
   int query_points = 2500;         // tracks of a lost frame described, spread over the image (>= 10)
   int candidates = 4;   // best-voted keyframes (and orientations) tried per lost frame, besides the newest (>= 1)
@@ -60,8 +65,9 @@ class Relocalizer {
   Relocalizer(const RelocalizerConfig& config, const camera::Camera& camera, const geometry::PnpConfig& pnp);
 
   // Indexes the frame as a keyframe at T_w_c: its tracks that carry a map point,
-  // with their descriptors and the points' current positions.
-  void addKeyframe(const cv::Mat& image, const FrameContext& frame, const map::Map& map,
+  // with their descriptors and the points' current positions. Returns false when it was not
+  // indexed (disabled, no image, too few points, or a near copy of the newest entry).
+  bool addKeyframe(const cv::Mat& image, const FrameContext& frame, const map::Map& map,
                    const Eigen::Isometry3d& T_w_c);
   // Looks for the frame in the index. Positions come from the map where the
   // point is still a landmark, else from the index.
@@ -98,6 +104,9 @@ class Relocalizer {
   std::uint32_t key(int table, const tracking::BriefDescriptor& d, signed char polarity) const;
   void hashEntry(const Entry& e, bool insert);
   cv::Mat smooth(const cv::Mat& image) const;
+  // The share of the newest entry's points that are among `landmarks` (the non-null ones; 0
+  // without an entry): how much of what the index holds last the keyframe still sees.
+  double sharedWithNewest(const std::vector<const map::Landmark*>& landmarks) const;
   // Indices of at most max_count of the tracks (restricted to `use`), spread over a grid.
   std::vector<std::size_t> spread(const FrameContext& frame, const std::vector<bool>& use, int max_count) const;
 
