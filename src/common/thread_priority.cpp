@@ -22,7 +22,7 @@ id_t currentThreadId() { return static_cast<id_t>(syscall(SYS_gettid)); }
 #endif
 
 bool lowerCurrentThreadPriority(int increment) {
-  if (increment < 0 || increment > kMaxNice) {
+  if (!isNiceIncrement(increment)) {
     throw std::invalid_argument("nice increment " + std::to_string(increment) + " is outside [0, " +
                                 std::to_string(kMaxNice) + "]");
   }

@@ -22,7 +22,7 @@ void DenseMapperConfig::validate() const {
   nltgv.validate();
   integrator.validate();
   if (min_points < 3) throw std::invalid_argument("dense.min_points must be >= 3");
-  if (nice_increment < 0 || nice_increment > kMaxNice) {
+  if (!isNiceIncrement(nice_increment)) {
     throw std::invalid_argument("dense.nice_increment must be in [0, 19]");
   }
 }

@@ -87,7 +87,7 @@ class SerialWorker {
 
  private:
   static int checkedNiceIncrement(int increment) {
-    if (increment < 0 || increment > kMaxNice) {
+    if (!isNiceIncrement(increment)) {
       throw std::invalid_argument("SerialWorker: the nice increment must be in [0, 19]");
     }
     return increment;

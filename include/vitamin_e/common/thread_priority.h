@@ -6,6 +6,8 @@
 namespace vitamin_e {
 
 inline constexpr int kMaxNice = 19;
+// A nice increment this module takes: [0, kMaxNice].
+inline constexpr bool isNiceIncrement(int increment) { return increment >= 0 && increment <= kMaxNice; }
 
 // Raises the calling thread's nice value by `increment` (at most to kMaxNice): it then runs
 // below the thread that created it, whatever that one's nice value. 0 leaves it as it is.
