@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <memory>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -287,6 +288,28 @@ TEST(Relocalizer, AKeyframeThatStillSeesMostOfTheNewestEntryIsNotIndexed) {
     // The opposite wall: none of the newest entry's points.
     indexKeyframe(cameraAt(0.0, 0.0, M_PI), 2, &map, &relocalizer);
     EXPECT_EQ(relocalizer.size(), max_shared == 1.0 ? 3u : 2u) << max_shared;
+  }
+}
+
+// The share is of the newest entry's points (at most points_per_keyframe of a frame's mapped
+// ones), not of the keyframe's own: the same view with every 10th / every 2nd track gone still
+// sees about 90 % / 50 % of the entry, and only the second is new enough to be indexed at 0.7.
+TEST(Relocalizer, TheShareIsOfTheNewestEntrysPoints) {
+  for (const int keep_of_ten : {9, 5}) {
+    RelocalizerConfig config;
+    config.max_shared_points = 0.7;
+    ve::map::Map map;
+    Relocalizer relocalizer(config, world().camera, pnpConfig());
+    indexKeyframe(cameraAt(0.0, 0.0, 0.0), 1, &map, &relocalizer);
+    ASSERT_EQ(relocalizer.size(), 1u);
+    FrameContext part = world().detect(world().render(cameraAt(0.0, 0.0, 0.0), 1), 1);
+    ASSERT_GT(part.tracks.size(), static_cast<std::size_t>(config.points_per_keyframe));  // the entry holds a part
+    std::vector<ve::pipeline::FrameTrack> kept;
+    for (std::size_t i = 0; i < part.tracks.size(); ++i) {
+      if (static_cast<int>(i % 10) < keep_of_ten) kept.push_back(part.tracks[i]);
+    }
+    part.tracks = kept;
+    EXPECT_EQ(relocalizer.addKeyframe(part.image, part, map, cameraAt(0.0, 0.0, 0.0)), keep_of_ten == 5) << keep_of_ten;
   }
 }
 
