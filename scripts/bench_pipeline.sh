@@ -21,6 +21,7 @@
 #   stages     mean wall ms per frame of each stage (stats.json timing_ms); in --pipelined mode they
 #              overlap; stats.json cpu_ms (builds that have it) gives the CPU ms per frame of each
 #              thread's stage (a stage's helper threads, e.g. the tracker's stripes, count in cpu/f only)
+#              and the cores those stages kept busy (their sum x fps)
 #   eff        parallel efficiency: pipelined fps / sequential fps of the same build
 #   ATE        trajectory error [cm] (vitamin_e_evaluate, Sim(3) RMSE) against the clip's ground truth
 #              (groundtruth_cam0_tum.txt or poses.txt in it), when there is one: --pipelined runs

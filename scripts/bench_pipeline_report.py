@@ -115,7 +115,10 @@ def main():
                              f" | {'/'.join(f'{x:.2f}' for x in a['ate_cm_runs']) if 'ate_cm' in a else '-'}")
                 if a["cpu_ms"]:
                     cpu = ", ".join(f"{k} {v:.2f}" for k, v in a["cpu_ms"].items())
-                    lines.append(f"{'':6} {'':10} CPU ms/frame by thread stage: {cpu}")
+                    # The stages' CPU over the runner's wall time: how many cores the pipeline kept busy
+                    # (the tracker's stripe threads and the start-up are left out).
+                    busy = sum(a["cpu_ms"].values()) * a["fps"] / 1000.0
+                    lines.append(f"{'':6} {'':10} CPU ms/frame by thread stage: {cpu}; cores busy (their sum x fps) {busy:.2f}")
             result["sets"][s][b] = per_mode
         if "base" in builds:
             for m in modes:
