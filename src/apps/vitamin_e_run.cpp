@@ -497,6 +497,9 @@ int run(const Options& o) {
   stats.wall_time_s = vitamin_e::elapsedMs(t_start) / 1000.0;
   if (dense) {
     const vitamin_e::fusion::DenseWorkStats work = dense->workStats();
+    if (work.failed > 0) {
+      progress.warn(std::to_string(work.failed) + " frame(s) not meshed (the last: " + work.last_failure + ")");
+    }
     for (double ms : work.frame_mesh_ms) stats.timing.add("mesh", ms);
     cpu_mesh += work.mesh_cpu_ms;
     const vitamin_e::fusion::TsdfIntegratorStats fused = dense->integratorStats();

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "vitamin_e/common/thread_priority.h"
 #include "vitamin_e/common/timing.h"
@@ -92,7 +95,7 @@ DenseFrameStats DenseMapper::addFrame(const std::vector<std::uint64_t>& ids, con
   return stats;
 }
 
-void DenseMapper::submitFrame(DenseFrame frame, std::size_t max_waiting) {
+std::size_t DenseMapper::submitFrame(DenseFrame frame, std::size_t max_waiting, WhenFull when_full) {
   if (frame.ids.size() != frame.p_c.size()) {
     throw std::invalid_argument("DenseMapper::submitFrame: ids and points differ in size");
   }
@@ -103,15 +106,31 @@ void DenseMapper::submitFrame(DenseFrame frame, std::size_t max_waiting) {
     std::lock_guard<std::mutex> lock(work_stats_mutex_);
     ++work_stats_.submitted;
   }
-  mesh_worker_.post(std::move(frame), max_waiting, WhenFull::kWait);
+  const std::size_t dropped = mesh_worker_.post(std::move(frame), max_waiting, when_full);
+  if (dropped > 0) {
+    std::lock_guard<std::mutex> lock(work_stats_mutex_);
+    work_stats_.dropped += dropped;
+  }
+  return dropped;
 }
 
 void DenseMapper::meshSubmitted(const DenseFrame& frame) {
   const double cpu0 = threadCpuMs();
-  const DenseFrameStats s = addFrame(frame);
+  DenseFrameStats s;
+  std::string failure;
+  try {
+    s = addFrame(frame);
+  } catch (const std::exception& e) {
+    // Escaping the worker would end the process: the frame is lost, the caller told (workStats).
+    failure = e.what();
+  }
   const double cpu = threadCpuMs() - cpu0;
   std::lock_guard<std::mutex> lock(work_stats_mutex_);
   work_stats_.mesh_cpu_ms += cpu;
+  if (!failure.empty()) {
+    ++work_stats_.failed;
+    work_stats_.last_failure = std::move(failure);
+  }
   if (s.integrated) {
     ++work_stats_.meshed;
     work_stats_.mesh_ms += s.mesh_ms + s.denoise_ms;

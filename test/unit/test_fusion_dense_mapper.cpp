@@ -123,6 +123,32 @@ TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
   EXPECT_THROW(threaded.submitFrame(denseFrame(ids, p_c, Eigen::Isometry3d::Identity())), std::invalid_argument);
 }
 
+// A live caller (the meshing nodelet) never waits for the meshing thread: beyond
+// `max_waiting` frames the oldest waiting one is dropped. Every frame submitted is
+// either meshed or counted as dropped, and the newest one is never dropped.
+TEST(DenseMapper, ALiveCallerDropsTheOldestWaitingFramesAndCountsThem) {
+  fusion::DenseMapperConfig cfg;
+  cfg.integrator.tsdf.voxel_size = 0.05;
+  cfg.integrator.tsdf.truncation = 0.15;
+  fusion::DenseMapper mapper(cfg, image());
+  std::mt19937 rng(11);
+  std::vector<std::uint64_t> ids;
+  std::vector<Eigen::Vector3d> p_c;
+  planePoints(Eigen::Isometry3d::Identity(), &rng, &ids, &p_c);
+  const int frames = 12;
+  std::size_t dropped = 0;
+  for (int k = 0; k < frames; ++k) {
+    dropped += mapper.submitFrame(denseFrame(ids, p_c, Eigen::Isometry3d::Identity()), 1, WhenFull::kDropOldest);
+  }
+  mapper.flush();
+  const fusion::DenseWorkStats w = mapper.workStats();
+  EXPECT_EQ(w.submitted, static_cast<std::size_t>(frames));
+  EXPECT_EQ(w.dropped, dropped);
+  EXPECT_EQ(w.meshed + w.dropped, w.submitted);
+  EXPECT_EQ(w.failed, 0u);
+  EXPECT_GE(w.meshed, 1u);  // at least the newest
+}
+
 TEST(DenseMapper, RefusesANiceIncrementOutsideItsRangeNamingTheKey) {
   for (const int increment : {-1, 20}) {
     fusion::DenseMapperConfig cfg;

@@ -69,6 +69,9 @@ struct DenseFrameStats {
 struct DenseWorkStats {
   std::size_t submitted = 0;
   std::size_t meshed = 0;             // frames that gave a mesh to fuse
+  std::size_t dropped = 0;            // frames dropped unmeshed (WhenFull::kDropOldest)
+  std::size_t failed = 0;             // frames whose meshing threw (not fused)
+  std::string last_failure;           // what the last of them threw
   double mesh_ms = 0.0;               // sum of mesh_ms + denoise_ms of those frames (wall)
   double mesh_cpu_ms = 0.0;           // the meshing thread's CPU time for all frames
   std::vector<double> frame_mesh_ms;  // mesh_ms + denoise_ms of each meshed frame
@@ -86,12 +89,15 @@ class DenseMapper {
   DenseFrameStats addFrame(const std::vector<std::uint64_t>& ids, const std::vector<Eigen::Vector3d>& p_c,
                            const Eigen::Isometry3d& T_w_c);
   // The same work as addFrame(DenseFrame) on the mapper's meshing thread
-  // (started at the first call): returns at once unless `max_waiting` frames
-  // already wait, then blocks until one is taken. Frames are meshed in
-  // submission order, none dropped (the TSDF integrator's own queue rules still
-  // apply). Throws like addFrame for a bad frame. Do not mix with addFrame
-  // between flush()es.
-  void submitFrame(DenseFrame frame, std::size_t max_waiting = 4);
+  // (started at the first call, `dense.nice_increment` below the caller):
+  // returns at once unless `max_waiting` frames already wait, then blocks until
+  // one is taken (kWait: none dropped) or drops the oldest waiting frame
+  // (kDropOldest: a live caller that must not block); returns the number dropped.
+  // Frames are meshed in submission order (the TSDF integrator's own queue rules
+  // still apply). Throws like addFrame for a bad frame; what the meshing itself
+  // throws is counted in workStats() (failed, last_failure), the frame not fused.
+  // Do not mix with addFrame between flush()es.
+  std::size_t submitFrame(DenseFrame frame, std::size_t max_waiting = 4, WhenFull when_full = WhenFull::kWait);
   DenseWorkStats workStats() const;
   ~DenseMapper() = default;  // the meshing thread finishes the submitted frames, then joins
   DenseMapper(const DenseMapper&) = delete;

@@ -1,8 +1,11 @@
 // vitamin_e/TsdfMeshingNodelet: per-frame messages of TrackingNodelet (~frame) in,
 // TSDF mesh out. Each message is the dense stage's input (fusion::DenseFrame, as
 // vitamin_e_run makes it: pipeline::DenseInput) and goes through fusion::DenseMapper
-// (Delaunay mesh, NLTGV smoothing, pruning, TSDF fusion on its own thread; the
-// volume follows the map's rescales). Every ~publish_period the voxel blocks whose
+// (Delaunay mesh, NLTGV smoothing and pruning on its meshing thread, TSDF fusion on
+// another, both dense.nice_increment below the SLAM's threads, so that in a shared
+// nodelet manager the mesh never takes the tracker's core; ~queue_size frames wait
+// for the meshing thread, the oldest dropped beyond; the volume follows the map's
+// rescales). Every ~publish_period the voxel blocks whose
 // surface changed are published as one TRIANGLE_LIST marker each (stable ids: rviz
 // replaces them); a subscriber that connects gets every block at once, and
 // ~republish_mesh sends them all again. The dense settings come from the "dense"
@@ -10,10 +13,13 @@
 // runner. ~load_tsdf: the TSDF of an earlier run (in the same map) fused into from
 // the start, its mesh published at once; ~save_tsdf: written on shutdown (and by
 // the ~save_tsdf service).
+#include <algorithm>
+#include <cstddef>
 #include <exception>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 
 #include <dynamic_reconfigure/server.h>
 #include <nodelet/nodelet.h>
@@ -42,6 +48,9 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
  public:
   ~TsdfMeshingNodelet() override {
     std::lock_guard<std::mutex> lock(mutex_);
+    // A file to write waits for every frame received (saveMesh / saveTsdf flush); without one
+    // the frames still waiting are dropped rather than meshed for nobody.
+    if (dense_ && mesh_file_.empty() && save_tsdf_.empty()) dense_->reset();
     if (dense_ && !mesh_file_.empty()) {
       std::string message;
       saveMesh(mesh_file_, &message);
@@ -100,6 +109,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     mesh_file_ = params.mesh_file;
     load_tsdf_ = params.load_tsdf;
     save_tsdf_ = params.save_tsdf;
+    queue_size_ = static_cast<std::size_t>(std::max(1, params.queue_size));
     try {
       const vitamin_e::pipeline::SystemConfig config = params.config_file.empty()
                                                            ? vitamin_e::pipeline::SystemConfig{}
@@ -192,9 +202,10 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     if (dense_ && msg->segment != segment_) {
       // The tracker started a new map (~reset, a time jump with nothing to relocalize in): a new volume.
       NODELET_INFO("tracking map %u: a new map, the TSDF starts over (%zu frames fused before)", msg->segment,
-                   frames_integrated_);
+                   framesFused());
+      dense_->reset();  // the frames of the old map still waiting are dropped, not meshed
       dense_.reset();
-      frames_integrated_ = 0;
+      reported_ = fusion::DenseWorkStats{};
       if (mesh_pub_.getNumSubscribers() > 0) {
         mesh_pub_.publish(markers_.clear(ros::Time::now()));
       } else {
@@ -215,10 +226,29 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
                                static_cast<unsigned long>(msg->frame_index));
         return;
       }
-      if (dense_->addFrame(frame).integrated) ++frames_integrated_;
+      dense_->submitFrame(std::move(frame), queue_size_, vitamin_e::WhenFull::kDropOldest);
     } catch (const std::exception& e) {
       NODELET_ERROR_THROTTLE(2.0, "frame %lu not fused: %s", static_cast<unsigned long>(msg->frame_index), e.what());
     }
+    reportMeshingLosses();
+  }
+
+  // Frames of this map fused so far (meshed on the meshing thread; the TSDF thread's own queue may still hold some).
+  std::size_t framesFused() const { return dense_ ? dense_->workStats().meshed : 0; }
+
+  // What the meshing thread lost since the last report: frames dropped (it fell ~queue_size
+  // frames behind) and frames whose meshing failed.
+  void reportMeshingLosses() {
+    if (!dense_) return;
+    const fusion::DenseWorkStats now = dense_->workStats();
+    if (now.dropped > reported_.dropped) {
+      NODELET_WARN_THROTTLE(5.0, "meshing %zu frame(s) behind: %zu dropped unmeshed so far", queue_size_, now.dropped);
+    }
+    if (now.failed > reported_.failed) {
+      NODELET_ERROR_THROTTLE(2.0, "%zu frame(s) not fused so far: %s", now.failed, now.last_failure.c_str());
+    }
+    reported_.dropped = now.dropped;
+    reported_.failed = now.failed;
   }
 
   // The blocks changed since the last publication. While nobody listens they
@@ -226,6 +256,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   // then this).
   void publishTimer(const ros::WallTimerEvent&) {
     std::lock_guard<std::mutex> lock(mutex_);
+    reportMeshingLosses();
     if (!dense_ || mesh_pub_.getNumSubscribers() == 0) return;
     publishUpdate(dense_->takeChangedBlocks());
   }
@@ -238,7 +269,7 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
     if (markers->markers.empty()) return;
     mesh_pub_.publish(visualization_msgs::MarkerArrayConstPtr(markers));
     NODELET_DEBUG("mesh: %zu changed blocks sent; %zu blocks, %zu triangles in all; %zu frames fused",
-                  update.blocks.size(), markers_.numMarkers(), markers_.numTriangles(), frames_integrated_);
+                  update.blocks.size(), markers_.numMarkers(), markers_.numTriangles(), framesFused());
   }
 
   // A new subscriber (a late rviz): every block sent so far, to it alone.
@@ -263,14 +294,14 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   }
 
   bool saveMesh(const std::string& path, std::string* message) {
-    const fusion::TriangleMesh mesh = dense_->extractMesh();
+    const fusion::TriangleMesh mesh = dense_->extractMesh();  // after every frame received
     std::string error;
     if (!fusion::saveMeshPly(mesh, path, &error)) {
       *message = "cannot write mesh " + path + ": " + error;
       return false;
     }
     *message = "mesh (" + std::to_string(mesh.vertices.size()) + " vertices, " + std::to_string(mesh.faces.size()) +
-               " triangles, " + std::to_string(frames_integrated_) + " frames, PLY) written to " + path;
+               " triangles, " + std::to_string(framesFused()) + " frames, PLY) written to " + path;
     return true;
   }
 
@@ -285,11 +316,11 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
 
   bool saveTsdf(const std::string& path, std::string* message) {
     std::string error;
-    if (!dense_->saveTsdf(path, &error)) {
+    if (!dense_->saveTsdf(path, &error)) {  // after every frame received
       *message = "cannot write TSDF " + path + ": " + error;
       return false;
     }
-    *message = "TSDF (" + std::to_string(frames_integrated_) + " frames fused) written to " + path;
+    *message = "TSDF (" + std::to_string(framesFused()) + " frames fused) written to " + path;
     return true;
   }
 
@@ -326,9 +357,10 @@ class TsdfMeshingNodelet : public nodelet::Nodelet {
   bool config_ok_ = false;
   std::unique_ptr<fusion::DenseMapper> dense_;  // made at the first frame (its intrinsics)
   meshing::PinholeImage dense_image_;
-  std::size_t frames_integrated_ = 0;
-  MeshBlockMarkers markers_;  // the blocks published so far
-  unsigned segment_ = 0;      // the tracker's map (TrackedFrame::segment) of the frames fused
+  std::size_t queue_size_ = 100;     // frames waiting for the meshing thread at most (~queue_size)
+  fusion::DenseWorkStats reported_;  // the losses reported so far (dropped, failed)
+  MeshBlockMarkers markers_;         // the blocks published so far
+  unsigned segment_ = 0;             // the tracker's map (TrackedFrame::segment) of the frames fused
   ros::Subscriber frame_sub_;
   ros::Publisher mesh_pub_;
   ros::ServiceServer save_srv_, save_tsdf_srv_, republish_srv_;
