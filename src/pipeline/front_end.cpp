@@ -1,5 +1,6 @@
 #include "vitamin_e/pipeline/front_end.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -23,9 +24,11 @@ FrontEnd::FrontEnd(const tracking::TrackerConfig& config, const camera::Camera& 
     : camera_(camera), tracker_(config) {}
 
 TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
-                             const tracking::DenseTracker::PriorProvider& priors) {
+                             const tracking::DenseTracker::PriorProvider& priors, std::uint64_t frames_in_mapping) {
+  const std::uint64_t sequence = calls_++;
   validateImage(image, camera_);
   TrackedFrame f;
+  f.sequence = sequence;
   f.timestamp = timestamp;
   f.timestamp_text = timestamp_text;
   if (!std::isfinite(timestamp) || (have_last_stamp_ && timestamp <= last_stamp_)) {
@@ -40,10 +43,17 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
   f.frame_index = next_frame_index_++;
   f.image = image;
   {
+    // The drops of the frames whose mapping is over; a later frame's stay pending.
     std::vector<std::uint64_t> drops;
     {
       std::lock_guard<std::mutex> lock(drops_mutex_);
-      drops.swap(pending_drops_);
+      const auto due = [&](const std::pair<std::uint64_t, std::uint64_t>& d) {
+        return d.first + 1 + frames_in_mapping <= sequence;
+      };
+      for (const auto& d : pending_drops_) {
+        if (due(d)) drops.push_back(d.second);
+      }
+      pending_drops_.erase(std::remove_if(pending_drops_.begin(), pending_drops_.end(), due), pending_drops_.end());
     }
     if (!drops.empty()) f.tracks_dropped = static_cast<int>(tracker_.dropTracks(drops));
   }
@@ -69,10 +79,10 @@ TrackedFrame FrontEnd::track(const cv::Mat& image, double timestamp, const std::
   return f;
 }
 
-void FrontEnd::dropTracks(const std::vector<std::uint64_t>& ids) {
+void FrontEnd::dropTracks(const std::vector<std::uint64_t>& ids, std::uint64_t from_sequence) {
   if (ids.empty()) return;
   std::lock_guard<std::mutex> lock(drops_mutex_);
-  pending_drops_.insert(pending_drops_.end(), ids.begin(), ids.end());
+  for (std::uint64_t id : ids) pending_drops_.emplace_back(from_sequence, id);
 }
 
 void FrontEnd::continueNumbering(std::uint64_t next_frame_index, std::uint64_t next_track_id) {

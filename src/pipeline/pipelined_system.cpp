@@ -6,6 +6,12 @@
 
 namespace vitamin_e::pipeline {
 
+namespace {
+// While a frame is tracked, the mapping thread may be on the frame before it (not on an older
+// one: the tracker waits for that), System::trackFrame's frames_in_mapping.
+constexpr std::uint64_t kFramesInMapping = 1;
+}  // namespace
+
 PipelinedSystem::PipelinedSystem(const SystemConfig& config, const camera::Camera& camera,
                                  const PipelinedOptions& options, ResultCallback on_result,
                                  System::PoseListener on_pose)
@@ -53,20 +59,29 @@ bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::
 void PipelinedSystem::trackingLoop() {
   while (std::optional<Input> in = input_.pop()) {
     setBusy(&tracking_busy_, true);
+    {
+      // The mapping of the frames before the last is over: the tracks it dropped end now, at the
+      // same frame in every run.
+      std::unique_lock<std::mutex> lock(count_mutex_);
+      idle_cv_.wait(lock, [this] { return mapped_ + kFramesInMapping >= handed_; });
+    }
     TrackedFrame frame;
     const double cpu0 = threadCpuMs();
     try {
       // The tracker's priors wait for the pose of the frame before (not for its keyframe
       // work): tracks found again from the newest pose, as in the sequential mode; the flow's
       // pass, most of the tracking, runs beside that mapping.
-      frame = system_->trackFrame(in->image, in->timestamp, in->timestamp_text, [this] {
-        std::uint64_t handed = 0;
-        {
-          std::lock_guard<std::mutex> lock(count_mutex_);
-          handed = handed_;
-        }
-        system_->waitForPriors(priors_base_ + handed);
-      });
+      frame = system_->trackFrame(
+          in->image, in->timestamp, in->timestamp_text,
+          [this] {
+            std::uint64_t handed = 0;
+            {
+              std::lock_guard<std::mutex> lock(count_mutex_);
+              handed = handed_;
+            }
+            system_->waitForPriors(priors_base_ + handed);
+          },
+          kFramesInMapping);
     } catch (const std::exception& e) {
       frame.skipped = true;
       frame.timestamp = in->timestamp;
@@ -93,6 +108,11 @@ void PipelinedSystem::mappingLoop() {
     const double cpu0 = threadCpuMs();
     FrameResult result = system_->mapFrame(std::move(*frame), on_pose_);
     const double cpu = threadCpuMs() - cpu0;
+    {
+      std::lock_guard<std::mutex> lock(count_mutex_);
+      ++mapped_;
+    }
+    idle_cv_.notify_all();
     if (on_result_) on_result_(std::move(result));
     std::lock_guard<std::mutex> lock(count_mutex_);
     cpu_.mapping_ms += cpu;

@@ -68,17 +68,17 @@ System::Impl::Impl(const SystemConfig& cfg, const camera::Camera& cam)
       map(cfg.map) {}
 
 TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
-                                      const std::function<void()>& before_priors) {
+                                      const std::function<void()>& before_priors, std::uint64_t frames_in_mapping) {
   const auto priors = [&]() {
     if (before_priors) before_priors();
     std::shared_ptr<const TrackPriorSource> source;
     {
       std::lock_guard<std::mutex> lock(prior_mutex);
-      source = prior_source;
+      source = counted_prior_source;
     }
     return source ? predictTrackPositions(*source, camera, timestamp) : std::vector<tracking::TrackPrior>{};
   };
-  TrackedFrame f = front_end.track(image, timestamp, timestamp_text, priors);
+  TrackedFrame f = front_end.track(image, timestamp, timestamp_text, priors, frames_in_mapping);
   if (!f.skipped) timings.add("tracking", f.tracking_ms);
   return f;
 }
@@ -97,6 +97,7 @@ FrameResult System::Impl::mapFrame(TrackedFrame&& f, const PoseListener& on_pose
     return result;
   }
   const double tracking_ms = f.tracking_ms;
+  mapping_sequence = f.sequence;
   mapper_behind = f.mapper_behind;
   priors_awaited = f.priors_awaited;
   const EndedTracks ended = takeTrackerCounts(&f, &result);
@@ -138,11 +139,16 @@ void System::Impl::markPriorsOut() {
   {
     std::lock_guard<std::mutex> lock(prior_mutex);
     ++prior_frames;
+    counted_prior_source = prior_source;
   }
   prior_cv.notify_all();
 }
 
-void System::Impl::clearPriorSource() { setPriorSource(nullptr); }
+void System::Impl::clearPriorSource() {
+  std::lock_guard<std::mutex> lock(prior_mutex);
+  prior_source.reset();
+  counted_prior_source.reset();
+}
 
 void System::Impl::setPriorSource(std::shared_ptr<const TrackPriorSource> source) {
   std::lock_guard<std::mutex> lock(prior_mutex);
@@ -217,7 +223,7 @@ AppliedMapUpdate System::Impl::applyUpdate(const MapUpdate& update) {
   policy.max_outlier_count = config.max_outlier_count;
   policy.localization_only = localization_only;
   AppliedMapUpdate applied = applyMapUpdate(update, policy, &map);
-  front_end.dropTracks(applied.removed);  // their tracks end before the next image is tracked
+  front_end.dropTracks(applied.removed, mapping_sequence);  // their tracks end before the next image is tracked
   counters.reused_map_points += static_cast<std::uint64_t>(applied.reassociated);
   return applied;
 }
@@ -625,7 +631,7 @@ System::~System() = default;
 
 FrameResult System::process(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
                             const PoseListener& on_pose) {
-  return impl_->mapFrame(impl_->trackFrame(image, timestamp, timestamp_text, {}), on_pose);
+  return impl_->mapFrame(impl_->trackFrame(image, timestamp, timestamp_text, {}, 0), on_pose);
 }
 
 std::uint64_t System::priorsOut() const {
@@ -639,8 +645,8 @@ void System::waitForPriors(std::uint64_t n) {
 }
 
 TrackedFrame System::trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
-                                const std::function<void()>& before_priors) {
-  return impl_->trackFrame(image, timestamp, timestamp_text, before_priors);
+                                const std::function<void()>& before_priors, std::uint64_t frames_in_mapping) {
+  return impl_->trackFrame(image, timestamp, timestamp_text, before_priors, frames_in_mapping);
 }
 
 FrameResult System::mapFrame(TrackedFrame&& frame, const PoseListener& on_pose) {

@@ -46,7 +46,7 @@ struct System::Impl {
   Impl(const SystemConfig& config, const camera::Camera& camera);
 
   TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
-                          const std::function<void()>& before_priors);
+                          const std::function<void()>& before_priors, std::uint64_t frames_in_mapping);
   FrameResult mapFrame(TrackedFrame&& frame, const PoseListener& on_pose);
   void reset();
   bool restartTracking();
@@ -124,10 +124,11 @@ struct System::Impl {
   map::Map map;
   MotionModel motion;
   bool initialized_once = false;
-  bool mapper_behind = false;       // this frame's TrackedFrame::mapper_behind
-  bool priors_awaited = false;      // this frame's TrackedFrame::priors_awaited
-  bool window_ba_deferred = false;  // the last keyframe left its window BA to the next one
-  double scene_depth = 1.0;         // median depth of the map seen from the camera, map units
+  std::uint64_t mapping_sequence = 0;  // this frame's TrackedFrame::sequence (tags its drops)
+  bool mapper_behind = false;          // this frame's TrackedFrame::mapper_behind
+  bool priors_awaited = false;         // this frame's TrackedFrame::priors_awaited
+  bool window_ba_deferred = false;     // the last keyframe left its window BA to the next one
+  double scene_depth = 1.0;            // median depth of the map seen from the camera, map units
   // map persistence (system_map_io.cpp)
   bool localization_only = false;  // the map is not changed (System::setLocalizationOnly)
   bool map_loaded = false;         // the map came from loadMap() (a loss is then never given up)
@@ -141,6 +142,10 @@ struct System::Impl {
   std::mutex prior_mutex;
   std::condition_variable prior_cv;
   std::shared_ptr<const TrackPriorSource> prior_source;
+  // prior_source when the last frame's priors were counted out: what the next frame's tracker
+  // reads, early priors even if the frame's end replaced them meanwhile (a pipelined tracker
+  // then reads the same priors whatever the threads' timing).
+  std::shared_ptr<const TrackPriorSource> counted_prior_source;
   std::uint64_t prior_frames = 0;  // mapFrame calls whose priors are out (early or at their end)
   bool priors_out_early = false;   // this frame's went out once its pose was found
   void publishPriorSource(const FrameResult& result);

@@ -1,10 +1,12 @@
 #pragma once
 // The tracking stage: image -> TrackedFrame (dense curvature-extrema tracks,
 // undistorted). Owns the tracker and the stream's stamp order. The mapping
-// stage may run on another thread: its only way back is dropTracks().
+// stage may run on another thread: its only way back is dropTracks(), which
+// takes effect at a frame fixed by the call order, never by the threads' timing.
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -26,11 +28,14 @@ class FrontEnd {
   // Tracks one image (validated: std::invalid_argument). A stamp that is not
   // finite or does not increase gives a skipped frame and leaves the tracker as it was.
   // priors: asked for by the tracker when it uses them (tracking::DenseTracker::track).
+  // frames_in_mapping: how many of the frames just before this one the mapping stage may
+  // still be on (0 sequential, 1 pipelined); their drops wait for the next frame.
   TrackedFrame track(const cv::Mat& image, double timestamp, const std::string& timestamp_text,
-                     const tracking::DenseTracker::PriorProvider& priors = {});
-  // Tracks the mapping stage rejected: they end before the next image is
-  // tracked (the same rule in the sequential and the pipelined mode). Thread-safe.
-  void dropTracks(const std::vector<std::uint64_t>& ids);
+                     const tracking::DenseTracker::PriorProvider& priors = {}, std::uint64_t frames_in_mapping = 0);
+  // Tracks the mapping stage rejected while it mapped the frame of TrackedFrame::sequence
+  // `from_sequence`: they end before frame from_sequence + 1 + frames_in_mapping is tracked
+  // (the caller makes sure that frame's mapping is over by then). Thread-safe.
+  void dropTracks(const std::vector<std::uint64_t>& ids, std::uint64_t from_sequence);
   // Forgets every track and pending drop; the stamp order is kept.
   void reset();
   // reset(), and the stamp order starts over: the next frame may be older than the
@@ -52,8 +57,9 @@ class FrontEnd {
   std::uint64_t frame_index_offset_ = 0;
   bool have_last_stamp_ = false;
   double last_stamp_ = 0.0;
+  std::uint64_t calls_ = 0;  // track() calls so far (TrackedFrame::sequence)
   std::mutex drops_mutex_;
-  std::vector<std::uint64_t> pending_drops_;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> pending_drops_;  // (from_sequence, track id)
 };
 
 }  // namespace vitamin_e::pipeline

@@ -4,8 +4,11 @@
 //            -> [tracked queue] -> mapping thread (init, pose, BA, map) -> on_result
 // While frame k is being mapped, frame k+1 is already being tracked. Results
 // arrive in frame order. Track rejections of the mapping stage reach the tracker
-// one frame later than in the sequential System, so results may differ slightly
-// from System::process (which is deterministic and used by the tests).
+// one frame later than in the sequential System, and the tracker's priors are the
+// frame before's early ones (System::trackFrame), so results differ slightly from
+// System::process; but not from one run to the next: they do not depend on the
+// threads' timing, except where pipeline.defer_keyframe_ba defers a keyframe's BA
+// because the mapper was behind (a load-dependent choice, stats: window_ba_deferred).
 #include <atomic>
 #include <condition_variable>
 #include <functional>
@@ -94,6 +97,7 @@ class PipelinedSystem {
   std::condition_variable idle_cv_;
   std::size_t submitted_ = 0, finished_ = 0, dropped_ = 0;
   std::uint64_t handed_ = 0;                           // frames given to the mapping thread
+  std::uint64_t mapped_ = 0;                           // of them, mapFrame has returned for
   std::uint64_t priors_base_ = 0;                      // system_->priorsOut() before this pipeline's first frame
   bool tracking_busy_ = false, mapping_busy_ = false;  // a stage is on a frame
   StageCpu cpu_;

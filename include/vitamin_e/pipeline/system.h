@@ -61,9 +61,15 @@ class System {
   // before_priors (optional) is called on the tracking thread once the flow has tracked the
   // frame, before the tracker reads its priors (the map points of the last mapped frame seen
   // from the predicted pose, tracker.retry_from_prior): PipelinedSystem waits there until the
-  // frame before has its pose (waitForPriors), so that the priors start from that pose.
+  // frame before has its pose (waitForPriors), so that the priors start from that pose; they
+  // are the ones put out first for that frame (its early priors), whatever its mapping did since.
+  // frames_in_mapping: how many frames just before this one may still be mapped meanwhile
+  // (0 sequential; PipelinedSystem: 1, and it starts a frame only once the mapping of the one
+  // before the last is over). The tracks the mapping of frame k ended end before frame
+  // k + 1 + frames_in_mapping is tracked: a pipelined run's results do not depend on the
+  // threads' timing (only pipeline.defer_keyframe_ba, which follows the load, does).
   TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "",
-                          const std::function<void()>& before_priors = {});
+                          const std::function<void()>& before_priors = {}, std::uint64_t frames_in_mapping = 0);
   FrameResult mapFrame(TrackedFrame&& frame, const PoseListener& on_pose = {});
   // How many mapFrame calls have put out the tracker's priors for the next frame: once the
   // frame's pose is found (before its keyframe's triangulation and window BA), or at its end.

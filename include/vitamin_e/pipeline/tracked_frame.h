@@ -24,6 +24,7 @@ struct FrameTrack {
 // The output of the tracking stage, the input of the mapping stage.
 struct TrackedFrame {
   std::uint64_t frame_index = 0;
+  std::uint64_t sequence = 0;  // the tracking stage's call count (skipped frames included): tags the mapping's drops
   double timestamp = 0.0;
   std::string timestamp_text;
   std::vector<FrameTrack> tracks;
