@@ -6,11 +6,6 @@
 
 namespace vitamin_e::pipeline {
 
-namespace {
-// While a frame is tracked, the mapping thread may be on the frame before it (not on an older
-// one: the tracker waits for that), System::trackFrame's frames_in_mapping.
-constexpr std::uint64_t kFramesInMapping = 1;
-}  // namespace
 
 PipelinedSystem::PipelinedSystem(const SystemConfig& config, const camera::Camera& camera,
                                  const PipelinedOptions& options, ResultCallback on_result,
@@ -29,6 +24,7 @@ PipelinedSystem::PipelinedSystem(std::unique_ptr<System> owned, const PipelinedO
       on_pose_(std::move(on_pose)),
       input_(options.input_capacity, options.drop_oldest),
       tracked_(options.tracked_capacity, false),
+      frames_in_mapping_(options.reproducible ? 1 : 0),
       priors_base_(system_->priorsOut()) {
   tracking_thread_ = std::thread([this] { trackingLoop(); });
   mapping_thread_ = std::thread([this] { mappingLoop(); });
@@ -59,11 +55,11 @@ bool PipelinedSystem::submit(const cv::Mat& image, double timestamp, const std::
 void PipelinedSystem::trackingLoop() {
   while (std::optional<Input> in = input_.pop()) {
     setBusy(&tracking_busy_, true);
-    {
-      // The mapping of the frames before the last is over: the tracks it dropped end now, at the
-      // same frame in every run.
+    if (frames_in_mapping_ > 0) {
+      // While this frame is tracked the mapping may be on the frame before it, not on an older
+      // one: the tracks the older ones dropped end now, at the same frame in every run.
       std::unique_lock<std::mutex> lock(count_mutex_);
-      idle_cv_.wait(lock, [this] { return mapped_ + kFramesInMapping >= handed_; });
+      idle_cv_.wait(lock, [this] { return mapped_ + frames_in_mapping_ >= handed_; });
     }
     TrackedFrame frame;
     const double cpu0 = threadCpuMs();
@@ -81,7 +77,7 @@ void PipelinedSystem::trackingLoop() {
             }
             system_->waitForPriors(priors_base_ + handed);
           },
-          kFramesInMapping);
+          frames_in_mapping_);
     } catch (const std::exception& e) {
       frame.skipped = true;
       frame.timestamp = in->timestamp;

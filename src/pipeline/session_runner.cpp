@@ -43,6 +43,7 @@ void SessionRunner::startPipeline() {
   p.input_capacity = options_.queue_frames;
   p.tracked_capacity = options_.queue_frames;
   p.drop_oldest = false;
+  p.reproducible = options_.reproducible;
   System::PoseListener on_pose;
   if (on_pose_) on_pose = [this](const FramePose& pose) { onPipelinePose(pose); };
   pipeline_ = std::make_unique<PipelinedSystem>(

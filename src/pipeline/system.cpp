@@ -74,7 +74,7 @@ TrackedFrame System::Impl::trackFrame(const cv::Mat& image, double timestamp, co
     std::shared_ptr<const TrackPriorSource> source;
     {
       std::lock_guard<std::mutex> lock(prior_mutex);
-      source = counted_prior_source;
+      source = frames_in_mapping > 0 ? counted_prior_source : prior_source;
     }
     return source ? predictTrackPositions(*source, camera, timestamp) : std::vector<tracking::TrackPrior>{};
   };

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <utility>
 
 #include "vitamin_e/eval/metrics.h"
 #include "vitamin_e/pipeline/pipelined_system.h"
@@ -301,8 +302,9 @@ TEST(SystemSynthetic, PipelinedRunsDoNotDependOnTheThreadsTiming) {
   config.defer_keyframe_ba = false;
   const auto run = [&](bool one_at_a_time) {
     std::vector<ve::pipeline::FrameResult> results;
-    ve::pipeline::PipelinedSystem pipelined(config, room.camera, ve::pipeline::PipelinedOptions{},
-                                            [&results](ve::pipeline::FrameResult r) { results.push_back(r); });
+    ve::pipeline::PipelinedSystem pipelined(
+        config, room.camera, ve::pipeline::PipelinedOptions{},
+        [&results](ve::pipeline::FrameResult r) { results.push_back(std::move(r)); });
     for (const auto& [image, t] : frames) {
       pipelined.submit(image, t);
       if (one_at_a_time) pipelined.flush();

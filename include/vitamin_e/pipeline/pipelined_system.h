@@ -3,12 +3,10 @@
 //   submit() -> [input queue] -> tracking thread (dense tracker, undistortion)
 //            -> [tracked queue] -> mapping thread (init, pose, BA, map) -> on_result
 // While frame k is being mapped, frame k+1 is already being tracked. Results
-// arrive in frame order. Track rejections of the mapping stage reach the tracker
-// one frame later than in the sequential System, and the tracker's priors are the
-// frame before's early ones (System::trackFrame), so results differ slightly from
-// System::process; but not from one run to the next: they do not depend on the
-// threads' timing, except where pipeline.defer_keyframe_ba defers a keyframe's BA
-// because the mapper was behind (a load-dependent choice, stats: window_ba_deferred).
+// arrive in frame order and differ slightly from System::process (deterministic,
+// used by the tests): the tracker gets the mapping stage's track rejections and its
+// priors later. PipelinedOptions::reproducible chooses how.
+
 #include <atomic>
 #include <condition_variable>
 #include <functional>
@@ -29,6 +27,13 @@ struct PipelinedOptions {
   std::size_t input_capacity = 2;    // frames waiting for the tracker
   std::size_t tracked_capacity = 2;  // tracked frames waiting for the mapper (fewer: less latency, live)
   bool drop_oldest = false;          // live input: drop the oldest waiting frame instead of blocking submit()
+  // true (offline): the mapping's track rejections reach the tracker one frame later than in
+  // sequential mode and the tracker reads the frame before's early priors (put out at its pose):
+  // a run gives the same results every time (System::trackFrame's frames_in_mapping 1), except
+  // where pipeline.defer_keyframe_ba follows the load. false (live): each as soon as the mapping
+  // has put it out, fresher (lower latency measured live; docs/PERFORMANCE.md) but dependent on
+  // the threads' timing, as a live camera's dropped frames make a run anyway.
+  bool reproducible = true;
 };
 
 class PipelinedSystem {
@@ -98,6 +103,7 @@ class PipelinedSystem {
   std::size_t submitted_ = 0, finished_ = 0, dropped_ = 0;
   std::uint64_t handed_ = 0;                           // frames given to the mapping thread
   std::uint64_t mapped_ = 0;                           // of them, mapFrame has returned for
+  const std::uint64_t frames_in_mapping_;              // System::trackFrame's (reproducible: 1, else 0)
   std::uint64_t priors_base_ = 0;                      // system_->priorsOut() before this pipeline's first frame
   bool tracking_busy_ = false, mapping_busy_ = false;  // a stage is on a frame
   StageCpu cpu_;

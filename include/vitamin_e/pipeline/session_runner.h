@@ -34,6 +34,7 @@ struct RunnerOptions {
   // Frames between the caller and the mapper (pipelined): one waiting for the tracker and
   // one tracked frame waiting for the mapper; process() blocks when they are taken.
   std::size_t queue_frames = 1;
+  bool reproducible = true;  // PipelinedOptions::reproducible (false: live, fresher hand-overs)
 };
 
 class SessionRunner {

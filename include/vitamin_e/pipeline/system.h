@@ -61,13 +61,14 @@ class System {
   // before_priors (optional) is called on the tracking thread once the flow has tracked the
   // frame, before the tracker reads its priors (the map points of the last mapped frame seen
   // from the predicted pose, tracker.retry_from_prior): PipelinedSystem waits there until the
-  // frame before has its pose (waitForPriors), so that the priors start from that pose; they
-  // are the ones put out first for that frame (its early priors), whatever its mapping did since.
-  // frames_in_mapping: how many frames just before this one may still be mapped meanwhile
-  // (0 sequential; PipelinedSystem: 1, and it starts a frame only once the mapping of the one
-  // before the last is over). The tracks the mapping of frame k ended end before frame
-  // k + 1 + frames_in_mapping is tracked: a pipelined run's results do not depend on the
-  // threads' timing (only pipeline.defer_keyframe_ba, which follows the load, does).
+  // frame before has its pose (waitForPriors), so that the priors start from that pose.
+  // frames_in_mapping: 0: the tracker takes what the mapping has put out by the time it needs
+  // it, the tracks it dropped and its newest priors (sequential: everything of the frame before;
+  // beside a running mapping, whatever the timing made of it: PipelinedOptions::reproducible
+  // false). n >= 1: up to n frames just before this one may still be mapped meanwhile (the
+  // caller makes sure no older one is): the tracks the mapping of frame k dropped end before
+  // frame k + 1 + n is tracked, and the priors are the ones first put out for the frame before
+  // (its early ones), so that the results do not depend on the threads' timing.
   TrackedFrame trackFrame(const cv::Mat& image, double timestamp, const std::string& timestamp_text = "",
                           const std::function<void()>& before_priors = {}, std::uint64_t frames_in_mapping = 0);
   FrameResult mapFrame(TrackedFrame&& frame, const PoseListener& on_pose = {});

@@ -256,6 +256,9 @@ void TrackingNodelet::makeSession(const vitamin_e::camera::Camera& camera) {
   try {
     vitamin_e::pipeline::RunnerOptions runner;
     runner.pipelined = params_.pipelined;
+    // A bag gives every frame: its run is reproducible. A live camera's dropped frames make each
+    // run its own, and the fresher hand-overs keep the latency lower (docs/PERFORMANCE.md).
+    runner.reproducible = params_.process_all_frames;
     runner_ = std::make_unique<vitamin_e::pipeline::SessionRunner>(
         system_config_, camera, params_.session(), runner,
         [this](FrameResult&& result, std::uint64_t ticket) { onResult(std::move(result), ticket); },
