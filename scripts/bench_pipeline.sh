@@ -24,8 +24,8 @@
 #              and the cores those stages kept busy (their sum x fps)
 #   eff        parallel efficiency: pipelined fps / sequential fps of the same build
 #   ATE        trajectory error [cm] (vitamin_e_evaluate, Sim(3) RMSE) against the clip's ground truth
-#              (groundtruth_cam0_tum.txt or poses.txt in it), when there is one: --pipelined runs
-#              depend on the threads' timing, so their accuracy is measured run by run
+#              (groundtruth_cam0_tum.txt or poses.txt in it), when there is one, run by run: a
+#              --pipelined run gives the same trajectory every time (a build before 7538326 did not)
 # Last line: JSON with every number. Timing only: accuracy is scripts/evaluate_suite.sh's.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
