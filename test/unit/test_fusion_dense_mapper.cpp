@@ -21,6 +21,14 @@ fusion::DenseFrame denseFrame(const std::vector<std::uint64_t>& ids, const std::
 }
 meshing::PinholeImage image() { return {{400.0, 400.0, 320.0, 240.0}, 640, 480}; }
 
+// 5 cm voxels for the plane 3 m away.
+fusion::DenseMapperConfig planeConfig() {
+  fusion::DenseMapperConfig cfg;
+  cfg.integrator.tsdf.voxel_size = 0.05;
+  cfg.integrator.tsdf.truncation = 0.15;
+  return cfg;
+}
+
 // Points on the plane z = 3 (world) seen by a camera at T_w_c looking along +z.
 void planePoints(const Eigen::Isometry3d& T_w_c, std::mt19937* rng, std::vector<std::uint64_t>* ids,
                  std::vector<Eigen::Vector3d>* p_c) {
@@ -42,10 +50,7 @@ void planePoints(const Eigen::Isometry3d& T_w_c, std::mt19937* rng, std::vector<
 }  // namespace
 
 TEST(DenseMapper, FusesNoisyPlaneFramesIntoAFlatMesh) {
-  fusion::DenseMapperConfig cfg;
-  cfg.integrator.tsdf.voxel_size = 0.05;
-  cfg.integrator.tsdf.truncation = 0.15;
-  fusion::DenseMapper mapper(cfg, image());
+  fusion::DenseMapper mapper(planeConfig(), image());
   std::mt19937 rng(5);
   std::vector<std::uint64_t> ids;
   std::vector<Eigen::Vector3d> p_c;
@@ -90,9 +95,7 @@ TEST(DenseMapper, SkipsFramesWithoutEnoughPointsOrPose) {
 // The meshing thread does addFrame's work in order: the same frames give the
 // same fused mesh, none is lost, and bad input is refused at the call.
 TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
-  fusion::DenseMapperConfig cfg;
-  cfg.integrator.tsdf.voxel_size = 0.05;
-  cfg.integrator.tsdf.truncation = 0.15;
+  fusion::DenseMapperConfig cfg = planeConfig();
   cfg.integrator.block_when_full = true;
   fusion::DenseMapper inline_mapper(cfg, image());
   fusion::DenseMapper threaded(cfg, image());
@@ -127,10 +130,7 @@ TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
 // `max_waiting` frames the oldest waiting one is dropped. Every frame submitted is
 // either meshed or counted as dropped, and the newest one is never dropped.
 TEST(DenseMapper, ALiveCallerDropsTheOldestWaitingFramesAndCountsThem) {
-  fusion::DenseMapperConfig cfg;
-  cfg.integrator.tsdf.voxel_size = 0.05;
-  cfg.integrator.tsdf.truncation = 0.15;
-  fusion::DenseMapper mapper(cfg, image());
+  fusion::DenseMapper mapper(planeConfig(), image());
   std::mt19937 rng(11);
   std::vector<std::uint64_t> ids;
   std::vector<Eigen::Vector3d> p_c;
@@ -163,9 +163,7 @@ TEST(DenseMapper, RefusesANiceIncrementOutsideItsRangeNamingTheKey) {
 }
 
 TEST(DenseMapper, ResetDropsWaitingFramesAndKeepsWorking) {
-  fusion::DenseMapperConfig cfg;
-  cfg.integrator.tsdf.voxel_size = 0.05;
-  cfg.integrator.tsdf.truncation = 0.15;
+  fusion::DenseMapperConfig cfg = planeConfig();
   std::mt19937 rng(3);
   std::vector<std::uint64_t> ids;
   std::vector<Eigen::Vector3d> p_c;
