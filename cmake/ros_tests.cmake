@@ -62,6 +62,12 @@ if(TARGET vitamin_e_run AND TARGET vitamin_e_evaluate)
       --data ${VE_TEST_DATA} --bag sequence.bag --out ${VE_TEST_OUT}/install_space
       --evaluate $<TARGET_FILE:vitamin_e_evaluate> --install ${CMAKE_BINARY_DIR}
       --downstream ${CMAKE_CURRENT_SOURCE_DIR}/test/downstream)
+  # The pipelined tracker in bag mode gives the same run as vitamin_e_run --pipelined (no IMU).
+  add_test(NAME rostest_euroc_launch_pipelined
+    COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_euroc_launch.py
+      --data ${VE_TEST_DATA} --bag sequence.bag --out ${VE_TEST_OUT}/euroc_launch_pipelined
+      --evaluate $<TARGET_FILE:vitamin_e_evaluate> --launch-arg pipelined:=true --launch-arg imu:=false
+      --compare-offline $<TARGET_FILE:vitamin_e_run> --offline-arg=--pipelined --offline-same)
   # imu_topic:="" as a shell leaves it (the two quotes): no IMU, the launch tracks (it crashed).
   add_test(NAME rostest_euroc_launch_no_imu
     COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_euroc_launch.py
@@ -72,6 +78,7 @@ if(TARGET vitamin_e_run AND TARGET vitamin_e_evaluate)
   add_test(NAME rostest_launch_maps
     COMMAND /usr/bin/python3 ${CMAKE_CURRENT_SOURCE_DIR}/test/ros/run_launch_maps.py
       --data ${VE_TEST_DATA} --out ${VE_TEST_OUT}/launch_maps --evaluate $<TARGET_FILE:vitamin_e_evaluate>)
-  set_tests_properties(rostest_euroc_launch_imu rostest_install_space rostest_euroc_launch_no_imu rostest_launch_maps
+  set_tests_properties(rostest_euroc_launch_imu rostest_euroc_launch_pipelined rostest_install_space
+    rostest_euroc_launch_no_imu rostest_launch_maps
     PROPERTIES TIMEOUT 600)
 endif()

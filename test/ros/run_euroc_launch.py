@@ -8,6 +8,10 @@ free port) and checks the trajectory it writes.
                                      install/ only (test/downstream) and run it
         [--max-tilt-deg D]           the map's z within D degrees of the true up
         [--compare-offline RUN_PATH] the ATE within 10 % of vitamin_e_run's on the same bag
+        [--offline-arg=ARG ...]      more arguments of that vitamin_e_run (e.g. --offline-arg=--pipelined)
+        [--offline-same]             the same poses as vitamin_e_run's: as many, at the same
+                                     stamps, the positions the same to 10 nm once rotated into
+                                     the launch's map frame (a rotation of the offline one)
         [--launch-arg NAME:=VALUE ...] more arguments of euroc.launch
         [--expect-log TEXT ...]      the launch's output must contain TEXT
         [--min-poses N] [--timeout S]
@@ -59,6 +63,16 @@ def evaluate(evaluator, traj, gt, aligned):
     if out.returncode != 0:
         sys.exit("run_euroc_launch.py: vitamin_e_evaluate failed: %s" % out.stderr.strip())
     return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def max_rotated_difference(a, b):
+    """The largest distance between the positions of a and b (same stamps) once b is rotated
+    onto a about their centroids (Kabsch): 0 up to rounding when b is the same run in other axes."""
+    pa, pb = a[:, 1:4] - a[:, 1:4].mean(axis=0), b[:, 1:4] - b[:, 1:4].mean(axis=0)
+    u, _, vt = np.linalg.svd(pb.T @ pa)
+    d = np.sign(np.linalg.det(u @ vt))
+    r = (u @ np.diag([1.0, 1.0, d]) @ vt).T
+    return float(np.max(np.linalg.norm(pa - pb @ r.T, axis=1)))
 
 
 def tilt_deg(traj, aligned):
@@ -114,6 +128,8 @@ def main():
     ap.add_argument("--downstream", default="")
     ap.add_argument("--max-tilt-deg", type=float, default=-1.0)
     ap.add_argument("--compare-offline", default="", help="vitamin_e_run, run with config/euroc.yaml as the launch")
+    ap.add_argument("--offline-arg", action="append", default=[])
+    ap.add_argument("--offline-same", action="store_true")
     ap.add_argument("--launch-arg", action="append", default=[])
     ap.add_argument("--expect-log", action="append", default=[])
     ap.add_argument("--min-poses", type=int, default=30)
@@ -207,11 +223,21 @@ def main():
         off_dir = os.path.join(args.out, "offline")
         config = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "config", "euroc.yaml")
         rc = subprocess.call([args.compare_offline, "--dataset", bag, "--calib", calib, "--config", config,
-                              "--out", off_dir, "--quiet"])
+                              "--out", off_dir, "--quiet"] + args.offline_arg)
         if rc != 0:
             sys.exit("run_euroc_launch.py: vitamin_e_run exited with %d" % rc)
         off = evaluate(args.evaluate, os.path.join(off_dir, "trajectory.txt"), gt, os.path.join(off_dir, "aligned.txt"))
         result["offline_ate_rmse_m"] = off["ate_rmse_m"]
+        if args.offline_same:
+            launched, offline = read_tum(traj), read_tum(os.path.join(off_dir, "trajectory.txt"))
+            if launched.shape != offline.shape or not np.allclose(launched[:, 0], offline[:, 0], rtol=0, atol=1e-6):
+                failures.append("%d poses through euroc.launch, %d offline, or other stamps: not the same run" %
+                                (len(launched), len(offline)))
+            else:
+                result["offline_max_difference_m"] = max_rotated_difference(launched, offline)
+                if not result["offline_max_difference_m"] < 1e-8:  # the files keep 1 nm
+                    failures.append("positions up to %.3g m apart through euroc.launch and offline: not the same run"
+                                    % result["offline_max_difference_m"])
         if not abs(ev["ate_rmse_m"] - off["ate_rmse_m"]) <= 0.1 * off["ate_rmse_m"]:
             failures.append("ATE %.5f m through euroc.launch vs %.5f m offline: more than 10 %% apart" %
                             (ev["ate_rmse_m"], off["ate_rmse_m"]))
