@@ -6,7 +6,6 @@
 
 namespace vitamin_e::pipeline {
 
-
 PipelinedSystem::PipelinedSystem(const SystemConfig& config, const camera::Camera& camera,
                                  const PipelinedOptions& options, ResultCallback on_result,
                                  System::PoseListener on_pose)

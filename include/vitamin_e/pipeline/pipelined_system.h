@@ -6,7 +6,6 @@
 // arrive in frame order and differ slightly from System::process (deterministic,
 // used by the tests): the tracker gets the mapping stage's track rejections and its
 // priors later. PipelinedOptions::reproducible chooses how.
-
 #include <atomic>
 #include <condition_variable>
 #include <functional>
