@@ -112,8 +112,10 @@ std::vector<Row> table(TrackingParams* p) {
   t.push_back(
       row("pipelined", &p->pipelined,
           "true: frame k+1 is tracked while frame k is mapped (two threads, as `vitamin_e_run --pipelined`; "
-          "`live.launch pipelined:=true`); false: one SLAM thread, deterministic (the tests comparing with offline "
-          "runs, `euroc.launch`). Results and publishing keep the frame order either way"));
+          "`live.launch pipelined:=true`, `euroc.launch pipelined:=true`; with `process_all_frames` the same "
+          "trajectory every run, as offline; live the mapper's newest output, lower latency); false: one SLAM "
+          "thread, deterministic (the tests comparing with offline runs, `euroc.launch`). Results and publishing "
+          "keep the frame order either way"));
   t.push_back({"queue_size", "1, or 10000 with `process_all_frames`",
                "image subscriber queue (before the SLAM queue); 0: the default",
                [p](const XmlRpc::XmlRpcValue& v) { readValue("queue_size", v, &p->queue_size); }});
