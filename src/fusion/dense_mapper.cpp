@@ -134,7 +134,7 @@ void DenseMapper::meshSubmitted(const DenseFrame& frame) {
   if (s.integrated) {
     ++work_stats_.meshed;
     work_stats_.mesh_ms += s.mesh_ms + s.denoise_ms;
-    work_stats_.frame_mesh_ms.push_back(s.mesh_ms + s.denoise_ms);
+    frame_mesh_ms_.push_back(s.mesh_ms + s.denoise_ms);
   }
 }
 
@@ -143,6 +143,11 @@ void DenseMapper::waitMeshed() { mesh_worker_.waitIdle(); }
 DenseWorkStats DenseMapper::workStats() const {
   std::lock_guard<std::mutex> lock(work_stats_mutex_);
   return work_stats_;
+}
+
+std::vector<double> DenseMapper::frameMeshMs() const {
+  std::lock_guard<std::mutex> lock(work_stats_mutex_);
+  return frame_mesh_ms_;
 }
 
 void DenseMapper::flush() {

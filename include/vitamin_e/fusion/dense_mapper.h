@@ -68,13 +68,12 @@ struct DenseFrameStats {
 // What the meshing thread did with the submitFrame() frames so far.
 struct DenseWorkStats {
   std::size_t submitted = 0;
-  std::size_t meshed = 0;             // frames that gave a mesh to fuse
-  std::size_t dropped = 0;            // frames dropped unmeshed (WhenFull::kDropOldest)
-  std::size_t failed = 0;             // frames whose meshing threw (not fused)
-  std::string last_failure;           // what the last of them threw
-  double mesh_ms = 0.0;               // sum of mesh_ms + denoise_ms of those frames (wall)
-  double mesh_cpu_ms = 0.0;           // the meshing thread's CPU time for all frames
-  std::vector<double> frame_mesh_ms;  // mesh_ms + denoise_ms of each meshed frame
+  std::size_t meshed = 0;    // frames that gave a mesh to fuse
+  std::size_t dropped = 0;   // frames dropped unmeshed (WhenFull::kDropOldest)
+  std::size_t failed = 0;    // frames whose meshing threw (not fused)
+  std::string last_failure;  // what the last of them threw
+  double mesh_ms = 0.0;      // sum of mesh_ms + denoise_ms of those frames (wall)
+  double mesh_cpu_ms = 0.0;  // the meshing thread's CPU time for all frames
 };
 
 class DenseMapper {
@@ -98,8 +97,9 @@ class DenseMapper {
   // throws is counted in workStats() (failed, last_failure), the frame not fused.
   // Do not mix with addFrame between flush()es.
   std::size_t submitFrame(DenseFrame frame, std::size_t max_waiting = 4, WhenFull when_full = WhenFull::kWait);
-  DenseWorkStats workStats() const;
-  ~DenseMapper() = default;  // the meshing thread finishes the submitted frames, then joins
+  DenseWorkStats workStats() const;         // cheap: a caller may poll it every frame
+  std::vector<double> frameMeshMs() const;  // mesh_ms + denoise_ms of each meshed frame so far
+  ~DenseMapper() = default;                 // the meshing thread finishes the submitted frames, then joins
   DenseMapper(const DenseMapper&) = delete;
   DenseMapper& operator=(const DenseMapper&) = delete;
   // The map was scaled by `factor` about `centre` (map coordinates): so is the
@@ -133,6 +133,7 @@ class DenseMapper {
   std::unique_ptr<TsdfIntegrator> integrator_;
   mutable std::mutex work_stats_mutex_;
   DenseWorkStats work_stats_;
+  std::vector<double> frame_mesh_ms_;  // under work_stats_mutex_
   // Touched by whichever thread meshes (the caller's with addFrame, the meshing thread's with submitFrame).
   MapScaling scaling_;        // the volume's, as submitted to the integrator
   MapScaling input_scaling_;  // DenseFrame::map_scaling of the last frame
