@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <numeric>
 
 namespace vitamin_e {
 
@@ -43,28 +42,44 @@ double upperMedian(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
+StageTimings::StageTimings(std::size_t max_samples_per_stage)
+    : max_samples_(std::max<std::size_t>(max_samples_per_stage, 2)) {}
+
 StageTimings::StageTimings(const StageTimings& other) {
   std::lock_guard<std::mutex> lock(other.mutex_);
-  samples_ = other.samples_;
+  max_samples_ = other.max_samples_;
+  stages_ = other.stages_;
   order_ = other.order_;
 }
 
 StageTimings& StageTimings::operator=(const StageTimings& other) {
   if (this == &other) return *this;
   std::scoped_lock lock(mutex_, other.mutex_);
-  samples_ = other.samples_;
+  max_samples_ = other.max_samples_;
+  stages_ = other.stages_;
   order_ = other.order_;
   return *this;
 }
 
 void StageTimings::add(const std::string& stage, double ms) {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = samples_.find(stage);
-  if (it == samples_.end()) {
+  auto it = stages_.find(stage);
+  if (it == stages_.end()) {
     order_.push_back(stage);
-    it = samples_.emplace(stage, std::vector<double>{}).first;
+    it = stages_.emplace(stage, Stage{}).first;
   }
-  it->second.push_back(ms);
+  Stage& s = it->second;
+  ++s.count;
+  s.sum_ms += ms;
+  if ((s.count - 1) % s.keep_every != 0) return;
+  if (s.kept.size() == max_samples_) {  // full: keep every other one, and from now on half as many
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < s.kept.size(); i += 2) s.kept[n++] = s.kept[i];
+    s.kept.resize(n);
+    s.keep_every *= 2;
+    if ((s.count - 1) % s.keep_every != 0) return;
+  }
+  s.kept.push_back(ms);
 }
 
 std::vector<std::string> StageTimings::stages() const {
@@ -74,16 +89,21 @@ std::vector<std::string> StageTimings::stages() const {
 
 std::vector<double> StageTimings::samples(const std::string& stage) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto it = samples_.find(stage);
-  return it == samples_.end() ? std::vector<double>{} : it->second;
+  auto it = stages_.find(stage);
+  return it == stages_.end() ? std::vector<double>{} : it->second.kept;
 }
 
 TimingSummary StageTimings::summary(const std::string& stage) const {
   TimingSummary s;
-  const std::vector<double> v = samples(stage);
-  if (v.empty()) return s;
-  s.count = v.size();
-  s.mean_ms = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  std::vector<double> v;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = stages_.find(stage);
+    if (it == stages_.end() || it->second.count == 0) return s;
+    s.count = it->second.count;
+    s.mean_ms = it->second.sum_ms / static_cast<double>(it->second.count);
+    v = it->second.kept;
+  }
   s.median_ms = percentile(v, 50.0);
   s.p95_ms = percentile(v, 95.0);
   return s;
@@ -107,7 +127,7 @@ std::string StageTimings::table(const std::vector<std::string>& stages) const {
 
 void StageTimings::clear() {
   std::lock_guard<std::mutex> lock(mutex_);
-  samples_.clear();
+  stages_.clear();
   order_.clear();
 }
 

@@ -134,8 +134,8 @@ void DenseMapper::meshSubmitted(const DenseFrame& frame) {
   if (s.integrated) {
     ++work_stats_.meshed;
     work_stats_.mesh_ms += s.mesh_ms + s.denoise_ms;
-    frame_mesh_ms_.push_back(s.mesh_ms + s.denoise_ms);
   }
+  if (s.integrated) mesh_timings_.add("mesh", s.mesh_ms + s.denoise_ms);
 }
 
 void DenseMapper::waitMeshed() { mesh_worker_.waitIdle(); }
@@ -145,10 +145,7 @@ DenseWorkStats DenseMapper::workStats() const {
   return work_stats_;
 }
 
-std::vector<double> DenseMapper::frameMeshMs() const {
-  std::lock_guard<std::mutex> lock(work_stats_mutex_);
-  return frame_mesh_ms_;
-}
+const StageTimings& DenseMapper::meshTimings() const { return mesh_timings_; }
 
 void DenseMapper::flush() {
   waitMeshed();

@@ -46,6 +46,32 @@ TEST(StageTimings, SummariesPerStageInFirstSeenOrder) {
   EXPECT_EQ(t.summary("missing").count, 0u);
 }
 
+// A node that runs for days adds a sample per frame and stage: the memory stays
+// bounded, the count and mean exact, the percentiles from samples spread over the
+// whole run (not only its start or its end).
+TEST(StageTimings, KeepsABoundedEvenlySpreadShareOfALongRun) {
+  StageTimings t(1000);
+  const std::size_t n = 100000;
+  // A run whose later half is slower: a kept share from one end only would miss it.
+  for (std::size_t i = 0; i < n; ++i) t.add("tracking", i < n / 2 ? static_cast<double>(i % 100) : 100.0 + (i % 100));
+  const std::vector<double> kept = t.samples("tracking");
+  EXPECT_LE(kept.size(), 1000u);
+  EXPECT_GE(kept.size(), 500u);
+  const vitamin_e::TimingSummary s = t.summary("tracking");
+  EXPECT_EQ(s.count, n);
+  EXPECT_NEAR(s.mean_ms, 99.5, 1e-9);  // exact: (49.5 + 149.5) / 2
+  EXPECT_NEAR(s.median_ms, 100.0, 2.0);
+  EXPECT_NEAR(s.p95_ms, 190.0, 3.0);
+  std::size_t slow = 0;
+  for (double ms : kept) slow += ms >= 100.0;
+  EXPECT_NEAR(static_cast<double>(slow) / static_cast<double>(kept.size()), 0.5, 0.01);
+  // Below the bound every sample is kept, in order.
+  StageTimings small(1000);
+  for (int i = 0; i < 1000; ++i) small.add("ba", i);
+  ASSERT_EQ(small.samples("ba").size(), 1000u);
+  EXPECT_EQ(small.samples("ba")[999], 999.0);
+}
+
 TEST(Percentile, UpperMedianTakesTheMiddleElementWithoutInterpolating) {
   EXPECT_DOUBLE_EQ(upperMedian({}), 0.0);
   EXPECT_DOUBLE_EQ(upperMedian({4.0, 1.0, 3.0}), 3.0);

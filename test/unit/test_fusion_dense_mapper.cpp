@@ -119,7 +119,7 @@ TEST(DenseMapper, SubmittedFramesGiveTheSameMeshAsAddFrame) {
   const fusion::DenseWorkStats w = threaded.workStats();
   EXPECT_EQ(w.submitted, static_cast<std::size_t>(frames));
   EXPECT_EQ(w.meshed, static_cast<std::size_t>(frames));
-  EXPECT_EQ(threaded.frameMeshMs().size(), static_cast<std::size_t>(frames));
+  EXPECT_EQ(threaded.meshTimings().summary("mesh").count, static_cast<std::size_t>(frames));
   EXPECT_EQ(threaded.integratorStats().integrated, static_cast<std::size_t>(frames));
   EXPECT_EQ(threaded.integratorStats().dropped, 0u);
   ids.pop_back();

@@ -3,7 +3,8 @@
 // steady_clock time point), processCpuMs() / threadCpuMs() (CPU time, which
 // stays meaningful on a loaded machine), ScopedTimer (adds its duration
 // to a named stage of StageTimings) and StageTimings (samples per stage,
-// mean/median/p95, the timing table printed at the end of a run).
+// mean/median/p95, the timing table printed at the end of a run). A node runs
+// for days: a stage keeps at most a bounded number of samples.
 #include <chrono>
 #include <map>
 #include <mutex>
@@ -46,7 +47,12 @@ double upperMedian(std::vector<double> values);
 // tracks and maps on two); readers get copies.
 class StageTimings {
  public:
-  StageTimings() = default;
+  // 2^16 samples: every frame of the longest dataset sequences; 512 kB per stage.
+  static constexpr std::size_t kDefaultMaxSamples = std::size_t{1} << 16;
+  // Per stage, the count and the mean are exact; the median and p95 come from at most
+  // max_samples_per_stage samples spread evenly over the run (past it every other sample
+  // is let go and from then on every 2nd, 4th, ... added one kept).
+  explicit StageTimings(std::size_t max_samples_per_stage = kDefaultMaxSamples);
   StageTimings(const StageTimings& other);
   StageTimings& operator=(const StageTimings& other);
 
@@ -54,7 +60,7 @@ class StageTimings {
   // Stages in first-seen order.
   std::vector<std::string> stages() const;
   TimingSummary summary(const std::string& stage) const;
-  std::vector<double> samples(const std::string& stage) const;
+  std::vector<double> samples(const std::string& stage) const;  // the kept ones, in the order added
   // A readable table: stage, mean, median, p95, count; of every stage in
   // first-seen order, or of the given stages in that order.
   std::string table() const;
@@ -62,8 +68,15 @@ class StageTimings {
   void clear();
 
  private:
+  struct Stage {
+    std::size_t count = 0;
+    double sum_ms = 0.0;
+    std::size_t keep_every = 1;  // a sample is kept when its index in the run is a multiple of this
+    std::vector<double> kept;
+  };
   mutable std::mutex mutex_;
-  std::map<std::string, std::vector<double>> samples_;
+  std::size_t max_samples_;
+  std::map<std::string, Stage> stages_;
   std::vector<std::string> order_;
 };
 

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "vitamin_e/common/serial_worker.h"
+#include "vitamin_e/common/timing.h"
 #include "vitamin_e/fusion/triangle_mesh.h"
 #include "vitamin_e/fusion/tsdf_integrator.h"
 #include "vitamin_e/meshing/frame_mesher.h"
@@ -98,7 +99,7 @@ class DenseMapper {
   // Do not mix with addFrame between flush()es.
   std::size_t submitFrame(DenseFrame frame, std::size_t max_waiting = 4, WhenFull when_full = WhenFull::kWait);
   DenseWorkStats workStats() const;         // cheap: a caller may poll it every frame
-  std::vector<double> frameMeshMs() const;  // mesh_ms + denoise_ms of each meshed frame so far
+  const StageTimings& meshTimings() const;  // stage "mesh": mesh_ms + denoise_ms of the meshed frames
   ~DenseMapper() = default;                 // the meshing thread finishes the submitted frames, then joins
   DenseMapper(const DenseMapper&) = delete;
   DenseMapper& operator=(const DenseMapper&) = delete;
@@ -133,7 +134,7 @@ class DenseMapper {
   std::unique_ptr<TsdfIntegrator> integrator_;
   mutable std::mutex work_stats_mutex_;
   DenseWorkStats work_stats_;
-  std::vector<double> frame_mesh_ms_;  // under work_stats_mutex_
+  StageTimings mesh_timings_;  // locks itself
   // Touched by whichever thread meshes (the caller's with addFrame, the meshing thread's with submitFrame).
   MapScaling scaling_;        // the volume's, as submitted to the integrator
   MapScaling input_scaling_;  // DenseFrame::map_scaling of the last frame
