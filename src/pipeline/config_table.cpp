@@ -87,6 +87,10 @@ std::vector<Field> configTable(SystemConfig& c) {
         "a map track the flow lost is tracked again from its map point seen from the predicted pose (corrected "
         "by the BRIEF matches around the map tracks), when that lies outside the flow's inlier band (a second "
         "layer after fast motion or dropped frames)");
+  t.key("strength_follows_prior_scale", &tk.strength_follows_prior_scale,
+        "a track retried from its prior passes the strength check within a band widened by the size change its "
+        "map point's depth predicts (at most 4x); a map track that check ended is retried when that change "
+        "exceeds 5 % (large steps toward or away from a point: dropped frames, a fast car)");
   t.key("threads", &tk.threads, "image stripes processed in parallel (1 = serial)");
 
   // --- init (two-view) ---

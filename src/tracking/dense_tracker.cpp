@@ -60,6 +60,11 @@ enum LossReason : int {
 // An absolute floor that follows the exposure (floor_follows_exposure) drops by
 // at most this factor: a darker change than that (a covered lens) ends tracks.
 constexpr float kMaxFloorDrop = 16.f;
+// strength_follows_prior_scale: the band widens by at most this factor, and a
+// track lost to the strength check is retried from its prior only when it widens
+// by more than the other one.
+constexpr float kMaxPriorWiden = 4.f;
+constexpr float kMinPriorWidenToRetry = 1.05f;
 
 const char* const kLossNames[kLossReasons] = {
     "ok", "climb", "weak", "strength_change", "flat", "back_climb", "forward_backward", "unconfirmed", "duplicate"};
@@ -106,6 +111,7 @@ struct DenseTracker::Impl {
   // none): a track with from_prior set is predicted at prior_uv instead of by the flow.
   std::vector<Eigen::Vector2f> prior_uv;
   std::vector<std::uint8_t> has_prior, from_prior;
+  std::vector<float> prior_widen;  // strength_follows_prior_scale: the strength band's factor per track
   std::vector<int> retry;
   std::vector<Eigen::Vector2d> match_prev, match_cur;  // this frame's BRIEF matches, previous -> this [px]
   bool fromPrior(int i) const { return !from_prior.empty() && from_prior[static_cast<size_t>(i)]; }
@@ -207,7 +213,9 @@ void DenseTracker::Impl::trackAll(const Eigen::Matrix2d& A, const Eigen::Vector2
       if (peak < std::max(min_rel, floor_k)) continue;
       const float strength = peak * inv_scale;
       s.fail = kLossStrengthChange;
-      if (strength > t.strength * ratio_hi || strength < t.strength * ratio_lo) continue;
+      // A size change the prior predicts moves the peak: the band widens by it (strength_follows_prior_scale).
+      const float wp = fromPrior(i) ? prior_widen[i] : 1.f;
+      if (strength > t.strength * ratio_hi * wp || strength < t.strength * ratio_lo / wp) continue;
       s.fail = kLossFlat;
       if (min_sharp > 0.f && peakSharpness(kappa, s.px, t.sign) < min_sharp) continue;
       // Backward: climb the previous curvature from the inverse prediction.
@@ -240,6 +248,7 @@ void DenseTracker::Impl::matchPriors(const std::vector<TrackPrior>& priors) {
   }
   const size_t n = tracks.size();
   prior_uv.assign(n, Eigen::Vector2f::Zero());
+  prior_widen.assign(n, 1.f);
   has_prior.assign(n, 0);
   from_prior.assign(n, 0);
   for (size_t i = 0; i < n; ++i) {
@@ -247,6 +256,9 @@ void DenseTracker::Impl::matchPriors(const std::vector<TrackPrior>& priors) {
                                      [](const TrackPrior& p, std::uint64_t id) { return p.id < id; });
     if (it == priors.end() || it->id != tracks[i].id || !it->uv.allFinite()) continue;
     prior_uv[i] = it->uv;
+    if (cfg.strength_follows_prior_scale && it->scale > 0.f && std::isfinite(it->scale)) {
+      prior_widen[i] = std::min(std::max(it->scale, 1.f / it->scale), kMaxPriorWiden);
+    }
     has_prior[i] = 1;
   }
 }
@@ -310,7 +322,10 @@ void DenseTracker::Impl::retryFromPriors(const Eigen::Matrix2d& A, const Eigen::
   // The band in which the affine fit counts its inliers (affine_flow.cpp).
   const float min_d2 = static_cast<float>(std::pow(2.5 * cfg.flow_sigma_px, 2));
   for (size_t i = 0; i < tracks.size(); ++i) {
-    if (steps[i].ok || !has_prior[i] || (prior_uv[i] - steps[i].pred).squaredNorm() <= min_d2) continue;
+    if (steps[i].ok || !has_prior[i]) continue;
+    // Ended by the strength check where the prior predicts a size change: once more, within the wider band.
+    const bool rescaled = steps[i].fail == kLossStrengthChange && prior_widen[i] > kMinPriorWidenToRetry;
+    if (!rescaled && (prior_uv[i] - steps[i].pred).squaredNorm() <= min_d2) continue;
     from_prior[i] = 1;
     retry.push_back(static_cast<int>(i));
   }

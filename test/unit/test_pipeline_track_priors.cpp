@@ -1,6 +1,7 @@
 // pipeline::predictTrackPositions: the map points of the last frame seen from the motion
 // model's pose at the new frame's time, the tracker's priors. A point behind the camera or
 // outside the image has none; after a gap of dropped frames the pose is that much farther on.
+// Each prior says how much larger the point looks than in the last frame.
 #include <gtest/gtest.h>
 
 #include "vitamin_e/pipeline/track_priors.h"
@@ -36,10 +37,14 @@ TEST(TrackPriors, MapPointsSeenFromThePredictedPose) {
   EXPECT_NEAR(priors[0].uv.x(), 320.0 + 500.0 * 1.0 / 9.0, 1e-3);
   EXPECT_NEAR(priors[0].uv.y(), 240.0 + 500.0 * 0.5 / 9.0, 1e-3);
   EXPECT_NEAR(priors[1].uv.x(), 320.0 - 500.0 * 2.0 / 19.0, 1e-3);
+  // Each point's image grows as its depth shrinks: 10 m in the last frame, 9 m now.
+  EXPECT_NEAR(priors[0].scale, 10.0 / 9.0, 1e-5);
+  EXPECT_NEAR(priors[1].scale, 20.0 / 19.0, 1e-5);
   // Two frames dropped: the camera is at z = 4 when the frame arrives.
   const auto later = vp::predictTrackPositions(source, camera, 0.4);
   ASSERT_EQ(later.size(), 2u);
   EXPECT_NEAR(later[0].uv.x(), 320.0 + 500.0 * 1.0 / 7.0, 1e-3);
+  EXPECT_NEAR(later[0].scale, 10.0 / 7.0, 1e-5);
 }
 
 TEST(TrackPriors, NoneWithoutAMotion) {

@@ -431,6 +431,58 @@ TEST(DenseTracker, PriorsAreCorrectedByTheMatchesAroundTheirTracks) {
   EXPECT_GT(off, 0.8 * exact) << "exact " << exact << " off " << off << " of " << total;
 }
 
+// The camera nears a near layer by a large step (dropped frames on a car): right of `split` the
+// image grows by 1.4x, and with it every blob, whose curvature peak changes by more than the
+// strength check allows; the far layer, most of the image, stays (so the frame's common change
+// does not follow the near one). Priors at the right places that say the size change keep the
+// near tracks the check ends otherwise; priors without it (scale 1) do not.
+TEST(DenseTracker, APriorsSizeChangeWidensTheStrengthCheck) {
+  const int w = 360, h = 240, split = 200;
+  const double zoom = 1.4;
+  const auto far = randomBlobs(600, w, h, 41), near = randomBlobs(300, w, h, 42);
+  const Eigen::Vector2d centre(split + 20.0, h / 2.0);
+  const Eigen::Matrix2d A = zoom * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d t = centre - A * centre;
+  const auto render = [&](const Eigen::Matrix2d& An, const Eigen::Vector2d& tn) {
+    cv::Mat img = renderBlobs(far, w, h, Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero());
+    renderBlobs(near, w, h, An, tn).colRange(split, w).copyTo(img.colRange(split, w));
+    return img;
+  };
+  const cv::Mat img0 = render(Eigen::Matrix2d::Identity(), Eigen::Vector2d::Zero()), img1 = render(A, t);
+  const auto found = [&](bool follow, float prior_scale, int* total) {
+    vt::TrackerConfig cfg = twoLayerConfig(true);
+    cfg.strength_follows_prior_scale = follow;
+    cfg.min_track_sharpness = 0.0;  // a grown blob is flatter too: that check is not the one under test
+    vt::DenseTracker tracker(cfg);
+    const auto f0 = tracker.track(img0, 0.0);
+    std::vector<vt::TrackPrior> priors;
+    std::map<std::uint64_t, Eigen::Vector2f> truth;
+    for (const auto& p : f0.points) {
+      if (p.uv.x() < split + 10) continue;  // only the near layer is mapped
+      const Eigen::Vector2f to = (A * p.uv.cast<double>() + t).cast<float>();
+      if (to.x() < split + 10 || to.y() < 12 || to.x() > w - 12 || to.y() > h - 12) continue;
+      truth[p.id] = to;
+      priors.push_back({p.id, to, prior_scale});
+    }
+    const auto f1 = tracker.track(img1, 0.05, priors);
+    int right = 0;
+    for (const auto& p : f1.points) {
+      const auto it = truth.find(p.id);
+      if (p.age > 0 && it != truth.end() && (p.uv - it->second).norm() <= 1.0f) ++right;
+    }
+    *total = static_cast<int>(truth.size());
+    return right;
+  };
+  int total = 0;
+  const int unknown = found(true, 1.f, &total);
+  ASSERT_GT(total, 40);
+  const int told = found(true, static_cast<float>(zoom), &total);
+  const int off = found(false, static_cast<float>(zoom), &total);
+  EXPECT_EQ(off, unknown);
+  EXPECT_GT(told, unknown + 0.2 * total) << "scale 1: " << unknown << ", scale " << zoom << ": " << told << " of "
+                                         << total;
+}
+
 // Every ended track is listed once with the check that ended it, in agreement
 // with lost_by, and none of them is among the live points.
 TEST(DenseTracker, EndedTracksNameTheirReason) {

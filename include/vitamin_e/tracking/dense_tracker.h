@@ -107,6 +107,11 @@ struct TrackerConfig {
   // outside the flow's inlier band (2.5 flow_sigma_px) of that prediction: a second layer that one affine flow
   // cannot follow (docs/PERFORMANCE.md, "Tracks found again from the map")
   bool retry_from_prior = true;
+  // a track retried from its prior passes the strength-change check within a band widened by the prior's size
+  // change (TrackPrior::scale, either way, at most 4x): a point the camera nears or leaves by a large step changes
+  // its curvature peak with its size; a map track the check ended on a frame whose prior changes its size by more
+  // than 5 % is retried (docs/PERFORMANCE.md, "Dropped frames")
+  bool strength_follows_prior_scale = true;
   // --- execution ---
   int threads = 2;  // stripes run in parallel (cv::parallel_for_); 1 = serial (>= 1)
 
@@ -119,6 +124,7 @@ struct TrackerConfig {
 struct TrackPrior {
   std::uint64_t id = 0;
   Eigen::Vector2f uv = Eigen::Vector2f::Zero();
+  float scale = 1.f;  // its image size here over its size in the last frame (depth there / depth here); 1: unknown
 };
 
 struct TrackedPoint {
