@@ -79,6 +79,17 @@ vt::TrackerConfig twoLayerConfig(bool retry_from_prior) {
   return cfg;
 }
 
+// The tracks of the frame before found within 1 px of where they went (truth: by track id).
+int foundWhereTheyWent(const std::vector<vt::TrackedPoint>& points,
+                       const std::map<std::uint64_t, Eigen::Vector2f>& truth) {
+  int right = 0;
+  for (const auto& p : points) {
+    const auto it = truth.find(p.id);
+    if (p.age > 0 && it != truth.end() && (p.uv - it->second).norm() <= 1.0f) ++right;
+  }
+  return right;
+}
+
 Eigen::Matrix2d rotation(double deg) {
   const double a = deg * M_PI / 180.0;
   Eigen::Matrix2d R;
@@ -415,13 +426,8 @@ TEST(DenseTracker, PriorsAreCorrectedByTheMatchesAroundTheirTracks) {
       priors.push_back({p.id, to + prior_error});
     }
     const auto f1 = tracker.track(img1, 0.05, priors);
-    int right = 0;
-    for (const auto& p : f1.points) {
-      const auto it = truth.find(p.id);
-      if (p.age > 0 && it != truth.end() && (p.uv - it->second).norm() <= 1.0f) ++right;
-    }
     *total = static_cast<int>(truth.size());
-    return right;
+    return foundWhereTheyWent(f1.points, truth);
   };
   int total = 0;
   const int exact = near_found(Eigen::Vector2f::Zero(), &total);
@@ -465,13 +471,8 @@ TEST(DenseTracker, APriorsSizeChangeWidensTheStrengthCheck) {
       priors.push_back({p.id, to, prior_scale});
     }
     const auto f1 = tracker.track(img1, 0.05, priors);
-    int right = 0;
-    for (const auto& p : f1.points) {
-      const auto it = truth.find(p.id);
-      if (p.age > 0 && it != truth.end() && (p.uv - it->second).norm() <= 1.0f) ++right;
-    }
     *total = static_cast<int>(truth.size());
-    return right;
+    return foundWhereTheyWent(f1.points, truth);
   };
   int total = 0;
   const int unknown = found(true, 1.f, &total);
