@@ -53,7 +53,10 @@ TEST(StageTimings, KeepsABoundedEvenlySpreadShareOfALongRun) {
   StageTimings t(1000);
   const std::size_t n = 100000;
   // A run whose later half is slower: a kept share from one end only would miss it.
-  for (std::size_t i = 0; i < n; ++i) t.add("tracking", i < n / 2 ? static_cast<double>(i % 100) : 100.0 + (i % 100));
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ms = static_cast<double>(i % 100);
+    t.add("tracking", i < n / 2 ? ms : 100.0 + ms);
+  }
   const std::vector<double> kept = t.samples("tracking");
   EXPECT_LE(kept.size(), 1000u);
   EXPECT_GE(kept.size(), 500u);
