@@ -500,7 +500,7 @@ int run(const Options& o) {
     if (work.failed > 0) {
       progress.warn(std::to_string(work.failed) + " frame(s) not meshed (the last: " + work.last_failure + ")");
     }
-    for (double ms : dense->meshTimings().samples("mesh")) stats.timing.add("mesh", ms);
+    stats.timing.addStage("mesh", dense->meshTimings());
     cpu_mesh += work.mesh_cpu_ms;
     const vitamin_e::fusion::TsdfIntegratorStats fused = dense->integratorStats();
     stats.dense_fused = fused.integrated;

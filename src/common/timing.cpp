@@ -82,6 +82,27 @@ void StageTimings::add(const std::string& stage, double ms) {
   s.kept.push_back(ms);
 }
 
+void StageTimings::addStage(const std::string& stage, const StageTimings& from) {
+  if (&from == this) return;
+  Stage theirs;
+  {
+    std::lock_guard<std::mutex> lock(from.mutex_);
+    const auto it = from.stages_.find(stage);
+    if (it == from.stages_.end() || it->second.count == 0) return;
+    theirs = it->second;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = stages_.find(stage);
+    if ((it == stages_.end() || it->second.count == 0) && theirs.kept.size() <= max_samples_) {
+      if (it == stages_.end()) order_.push_back(stage);
+      stages_[stage] = std::move(theirs);
+      return;
+    }
+  }
+  for (double ms : theirs.kept) add(stage, ms);
+}
+
 std::vector<std::string> StageTimings::stages() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return order_;

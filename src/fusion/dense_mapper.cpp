@@ -133,9 +133,8 @@ void DenseMapper::meshSubmitted(const DenseFrame& frame) {
   }
   if (s.integrated) {
     ++work_stats_.meshed;
-    work_stats_.mesh_ms += s.mesh_ms + s.denoise_ms;
+    mesh_timings_.add("mesh", s.mesh_ms + s.denoise_ms);
   }
-  if (s.integrated) mesh_timings_.add("mesh", s.mesh_ms + s.denoise_ms);
 }
 
 void DenseMapper::waitMeshed() { mesh_worker_.waitIdle(); }

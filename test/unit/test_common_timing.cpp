@@ -68,6 +68,15 @@ TEST(StageTimings, KeepsABoundedEvenlySpreadShareOfALongRun) {
   std::size_t slow = 0;
   for (double ms : kept) slow += ms >= 100.0;
   EXPECT_NEAR(static_cast<double>(slow) / static_cast<double>(kept.size()), 0.5, 0.01);
+  // Handed on whole (the dense mapper's mesh times into a run's table): the same figures.
+  StageTimings report;
+  report.add("ba", 1.0);
+  report.addStage("tracking", t);
+  EXPECT_EQ(report.summary("tracking").count, n);
+  EXPECT_DOUBLE_EQ(report.summary("tracking").mean_ms, s.mean_ms);
+  EXPECT_DOUBLE_EQ(report.summary("tracking").median_ms, s.median_ms);
+  ASSERT_EQ(report.stages().size(), 2u);
+  EXPECT_EQ(report.stages()[1], "tracking");
   // Below the bound every sample is kept, in order.
   StageTimings small(1000);
   for (int i = 0; i < 1000; ++i) small.add("ba", i);

@@ -57,6 +57,9 @@ class StageTimings {
   StageTimings& operator=(const StageTimings& other);
 
   void add(const std::string& stage, double ms);
+  // `stage` of `from` added to this one's: its count, mean and kept samples as they are when
+  // this one has none of that stage yet, else its kept samples one by one.
+  void addStage(const std::string& stage, const StageTimings& from);
   // Stages in first-seen order.
   std::vector<std::string> stages() const;
   TimingSummary summary(const std::string& stage) const;

@@ -69,11 +69,10 @@ struct DenseFrameStats {
 // What the meshing thread did with the submitFrame() frames so far.
 struct DenseWorkStats {
   std::size_t submitted = 0;
-  std::size_t meshed = 0;    // frames that gave a mesh to fuse
+  std::size_t meshed = 0;    // frames that gave a mesh to fuse (their times: DenseMapper::meshTimings())
   std::size_t dropped = 0;   // frames dropped unmeshed (WhenFull::kDropOldest)
   std::size_t failed = 0;    // frames whose meshing threw (not fused)
   std::string last_failure;  // what the last of them threw
-  double mesh_ms = 0.0;      // sum of mesh_ms + denoise_ms of those frames (wall)
   double mesh_cpu_ms = 0.0;  // the meshing thread's CPU time for all frames
 };
 
