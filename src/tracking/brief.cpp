@@ -83,6 +83,19 @@ bool BriefExtractor::describe(const cv::Mat& img, int x, int y, BriefDescriptor*
   return true;
 }
 
+namespace {
+
+// The indices 0..n-1 ordered by sign, ascending within a sign (all of them when
+// there are no signs): a match is only ever between equal signs.
+std::vector<int> indicesBySign(std::size_t n, const std::vector<signed char>* sign) {
+  std::vector<int> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<int>(i);
+  if (sign) std::stable_sort(order.begin(), order.end(), [sign](int x, int y) { return (*sign)[x] < (*sign)[y]; });
+  return order;
+}
+
+}  // namespace
+
 std::vector<std::pair<int, int>> matchBrief(const std::vector<BriefDescriptor>& a,
                                             const std::vector<BriefDescriptor>& b, const MatchConfig& c,
                                             const std::vector<signed char>* sign_a,
@@ -91,31 +104,56 @@ std::vector<std::pair<int, int>> matchBrief(const std::vector<BriefDescriptor>& 
   if (a.empty() || b.empty()) return out;
   const bool use_sign = sign_a && sign_b && sign_a->size() == a.size() && sign_b->size() == b.size();
   const size_t na = a.size(), nb = b.size();
-  // One pass over the distance matrix: best and second best per row, best per column.
+  // The distance matrix's blocks of equal signs, one pass each: best and second
+  // best per row, best per column. Rows and columns are visited in ascending
+  // index order within a block, so that ties break as in one pass over the whole
+  // matrix; the other blocks are never computed (and no per-pair sign test is
+  // left for the branch predictor to guess: the signs are random).
+  const std::vector<int> rows = indicesBySign(na, use_sign ? sign_a : nullptr);
+  const std::vector<int> cols = indicesBySign(nb, use_sign ? sign_b : nullptr);
   std::vector<int> best_a(na, -1), d1_a(na, INT_MAX), d2_a(na, INT_MAX);
   std::vector<int> best_b(nb, -1), d1_b(nb, INT_MAX);
-  for (size_t i = 0; i < na; ++i) {
-    for (size_t j = 0; j < nb; ++j) {
-      if (use_sign && (*sign_a)[i] != (*sign_b)[j]) continue;
-      const int d = hammingDistance(a[i], b[j]);
-      if (d < d1_a[i]) {
-        d2_a[i] = d1_a[i];
-        d1_a[i] = d;
-        best_a[i] = static_cast<int>(j);
-      } else if (d < d2_a[i]) {
-        d2_a[i] = d;
-      }
-      if (d < d1_b[j]) {
-        d1_b[j] = d;
-        best_b[j] = static_cast<int>(i);
+  const auto sign_of = [use_sign](const std::vector<signed char>* sign, int i) { return use_sign ? (*sign)[i] : 0; };
+  size_t r0 = 0, c0 = 0;
+  while (r0 < na && c0 < nb) {
+    const int sr = sign_of(sign_a, rows[r0]), sc = sign_of(sign_b, cols[c0]);
+    size_t r1 = r0, c1 = c0;
+    while (r1 < na && sign_of(sign_a, rows[r1]) == sr) ++r1;
+    while (c1 < nb && sign_of(sign_b, cols[c1]) == sc) ++c1;
+    if (sr == sc) {
+      for (size_t ri = r0; ri < r1; ++ri) {
+        const int i = rows[ri];
+        const BriefDescriptor& da = a[static_cast<size_t>(i)];
+        int best = -1, d1 = INT_MAX, d2 = INT_MAX;
+        for (size_t cj = c0; cj < c1; ++cj) {
+          const int j = cols[cj];
+          const int d = hammingDistance(da, b[static_cast<size_t>(j)]);
+          if (d < d1) {
+            d2 = d1;
+            d1 = d;
+            best = j;
+          } else if (d < d2) {
+            d2 = d;
+          }
+          if (d < d1_b[static_cast<size_t>(j)]) {
+            d1_b[static_cast<size_t>(j)] = d;
+            best_b[static_cast<size_t>(j)] = i;
+          }
+        }
+        best_a[static_cast<size_t>(i)] = best;
+        d1_a[static_cast<size_t>(i)] = d1;
+        d2_a[static_cast<size_t>(i)] = d2;
       }
     }
+    // Advance the block with the smaller sign (both when they are equal).
+    if (sr <= sc) r0 = r1;
+    if (sc <= sr) c0 = c1;
   }
   for (size_t i = 0; i < na; ++i) {
     const int j = best_a[i];
     if (j < 0 || d1_a[i] > c.max_distance) continue;
     if (c.ratio < 1.0 && d2_a[i] != INT_MAX && d1_a[i] >= c.ratio * d2_a[i]) continue;
-    if (c.cross_check && best_b[j] != static_cast<int>(i)) continue;
+    if (c.cross_check && best_b[static_cast<size_t>(j)] != static_cast<int>(i)) continue;
     out.emplace_back(static_cast<int>(i), j);
   }
   return out;

@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <map>
 #include <random>
@@ -758,6 +759,81 @@ TEST(Brief, DistanceUnchangedByBrightnessOffset) {
   // Out of the image: no descriptor.
   vt::BriefDescriptor d;
   EXPECT_FALSE(brief.describe(base, 3, 50, &d));
+}
+
+// matchBrief's definition, one pass over the whole distance matrix with a sign
+// test per pair: what the matcher must return, ties included.
+std::vector<std::pair<int, int>> matchBriefByDefinition(const std::vector<vt::BriefDescriptor>& a,
+                                                        const std::vector<vt::BriefDescriptor>& b,
+                                                        const vt::MatchConfig& c, const std::vector<signed char>* sa,
+                                                        const std::vector<signed char>* sb) {
+  const bool use_sign = sa && sb && sa->size() == a.size() && sb->size() == b.size();
+  std::vector<int> best_a(a.size(), -1), d1_a(a.size(), INT_MAX), d2_a(a.size(), INT_MAX);
+  std::vector<int> best_b(b.size(), -1), d1_b(b.size(), INT_MAX);
+  for (size_t i = 0; i < a.size(); ++i) {
+    for (size_t j = 0; j < b.size(); ++j) {
+      if (use_sign && (*sa)[i] != (*sb)[j]) continue;
+      const int d = vt::hammingDistance(a[i], b[j]);
+      if (d < d1_a[i]) {
+        d2_a[i] = d1_a[i];
+        d1_a[i] = d;
+        best_a[i] = static_cast<int>(j);
+      } else if (d < d2_a[i]) {
+        d2_a[i] = d;
+      }
+      if (d < d1_b[j]) {
+        d1_b[j] = d;
+        best_b[j] = static_cast<int>(i);
+      }
+    }
+  }
+  std::vector<std::pair<int, int>> out;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const int j = best_a[i];
+    if (j < 0 || d1_a[i] > c.max_distance) continue;
+    if (c.ratio < 1.0 && d2_a[i] != INT_MAX && d1_a[i] >= c.ratio * d2_a[i]) continue;
+    if (c.cross_check && best_b[static_cast<size_t>(j)] != static_cast<int>(i)) continue;
+    out.emplace_back(static_cast<int>(i), j);
+  }
+  return out;
+}
+
+// The matcher visits only the blocks of equal signs: the same pairs as the
+// definition, for every config, with and without signs, on descriptors that
+// tie often (few bits apart from a handful of patterns).
+TEST(Brief, MatchingByBlocksOfEqualSignsIsTheDefinition) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::uint64_t> word;
+  std::vector<vt::BriefDescriptor> patterns(6);
+  for (auto& p : patterns) {
+    for (auto& w : p.bits) w = word(rng);
+  }
+  const auto draw = [&](int n, std::vector<signed char>* sign) {
+    std::vector<vt::BriefDescriptor> out(static_cast<size_t>(n));
+    for (auto& d : out) {
+      d = patterns[rng() % patterns.size()];
+      for (int k = static_cast<int>(rng() % 4); k > 0; --k) d.bits[rng() % 4] ^= std::uint64_t{1} << (rng() % 64);
+      sign->push_back(rng() % 2 ? 1 : -1);
+    }
+    return out;
+  };
+  int matched = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<signed char> sa, sb;
+    const auto a = draw(40 + trial * 7, &sa), b = draw(30 + trial * 11, &sb);
+    std::vector<signed char> sb_short(sb.begin(), sb.end() - 1);  // sizes differ: no sign test
+    for (const vt::MatchConfig c : {vt::MatchConfig{70, 0.9, true}, vt::MatchConfig{2, 1.0, false},
+                                    vt::MatchConfig{256, 1.0, true}, vt::MatchConfig{3, 0.8, false}}) {
+      for (const std::vector<signed char>* sb_used : {&sb, &sb_short}) {
+        const auto got = vt::matchBrief(a, b, c, &sa, sb_used);
+        EXPECT_EQ(got, matchBriefByDefinition(a, b, c, &sa, sb_used)) << "trial " << trial;
+        matched += static_cast<int>(got.size());
+      }
+      EXPECT_EQ(vt::matchBrief(a, b, c), matchBriefByDefinition(a, b, c, nullptr, nullptr));
+    }
+  }
+  EXPECT_GT(matched, 200);  // not a comparison of empty lists
+  EXPECT_TRUE(vt::matchBrief({}, patterns, vt::MatchConfig{}).empty());
 }
 
 TEST(Brief, SameBitsForEveryLayoutOfTheImage) {
