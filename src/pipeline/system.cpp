@@ -251,7 +251,7 @@ FrameRefinement System::Impl::refine(const FrameContext& frame, const Eigen::Iso
 }
 
 void System::Impl::initialize(FrameContext& frame, FrameResult* result) {
-  ScopedTimer timer(&timings, "init");
+  ScopedTimer timer(&timings, "init", &result->timing_ms);
   if (localization_only) {  // a new map would be a change of the map
     report(RecoveryEvent::kNoMapYet, frame, result);
     result->message = "localization only: no map to localize in";
@@ -371,7 +371,7 @@ void System::Impl::relocalize(FrameContext& frame, FrameResult* result) {
 }
 
 System::Impl::MapSearch System::Impl::searchMap(FrameContext& frame, FrameResult* result) {
-  ScopedTimer timer(&timings, "relocalize");
+  ScopedTimer timer(&timings, "relocalize", &result->timing_ms);
   const Relocalization r = relocalizer.relocalize(frame.image, frame, map);
   FrameDiagnostics& d = result->diagnostics;
   d.relocalization_matches = r.matches;

@@ -362,6 +362,10 @@ TEST(Robustness, BlackoutOfTwoSecondsRelocalizesInTheSameMap) {
   EXPECT_LE(found.relocalization_inliers, found.relocalization_matches);
   EXPECT_TRUE(found.keyframe);  // a relocalized frame becomes a keyframe
   EXPECT_EQ(run.results[kBlackBegin - 1].diagnostics.relocalization, RelocalizationOutcome::kNotTried);
+  // What the search cost is the frame's stage "relocalize" (stats.json timing_ms), only where it ran.
+  EXPECT_EQ(run.results[again].timing_ms.count("relocalize"), 1u);
+  EXPECT_EQ(run.results[kBlackBegin - 1].timing_ms.count("relocalize"), 0u);
+  EXPECT_EQ(run.results.front().timing_ms.count("init"), 1u);
   for (int i = kBlackBegin + 1; i < again; ++i) {
     const RelocalizationOutcome outcome = run.results[i].diagnostics.relocalization;
     EXPECT_TRUE(outcome == RelocalizationOutcome::kNotFound || outcome == RelocalizationOutcome::kDidNotHold)
