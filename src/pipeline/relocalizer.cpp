@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "vitamin_e/common/rounding.h"
@@ -331,32 +332,52 @@ Relocalization Relocalizer::relocalize(const cv::Mat& image, const FrameContext&
   match.max_distance = config_.max_distance;
   match.ratio = config_.ratio;
   match.cross_check = true;
+  // Each candidate's matches and pose, independent of the others: on OpenCV's
+  // worker threads (a lost frame's matching is most of its cost); chosen below in
+  // the candidates' order, so the answer does not depend on the threads.
+  struct Tried {
+    int matches = 0;
+    geometry::PnpResult pose;
+  };
+  std::vector<Tried> tried(candidates.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(candidates.size())), [&](const cv::Range& range) {
+    for (int n = range.start; n < range.end; ++n) {
+      const Candidate& c = candidates[static_cast<std::size_t>(n)];
+      const Entry& e = entries_[c.entry];
+      const Described& d = described[c.orientation];
+      const auto pairs = tracking::matchBrief(d.descriptors, e.descriptors, match, &d.polarities, &e.polarities);
+      Tried& t = tried[static_cast<std::size_t>(n)];
+      t.matches = static_cast<int>(pairs.size());
+      if (t.matches < config_.min_inliers) continue;
+      std::vector<Eigen::Vector3d> p_w;
+      std::vector<Eigen::Vector2d> xy;
+      p_w.reserve(pairs.size());
+      xy.reserve(pairs.size());
+      for (const auto& [q, k] : pairs) {
+        const Point& p = e.points[static_cast<std::size_t>(k)];
+        const map::Landmark* l = map.landmark(p.landmark_id);
+        p_w.push_back(l ? l->p_w : p.p_w);
+        xy.push_back(frame.tracks[d.track[static_cast<std::size_t>(q)]].xy);
+      }
+      t.pose = geometry::solvePnpRansac(p_w, xy, pnp_, nullptr);
+    }
+  });
   best.why = "no keyframe gave a pose";
-  for (const Candidate& c : candidates) {
+  for (std::size_t n = 0; n < candidates.size(); ++n) {
+    const Candidate& c = candidates[n];
     const Entry& e = entries_[c.entry];
-    const Described& d = described[c.orientation];
-    const auto pairs = tracking::matchBrief(d.descriptors, e.descriptors, match, &d.polarities, &e.polarities);
-    if (static_cast<int>(pairs.size()) < config_.min_inliers) {
-      if (best.matches == 0) best.why = "too few descriptor matches (" + std::to_string(pairs.size()) + ")";
+    const Tried& t = tried[n];
+    if (t.matches < config_.min_inliers) {
+      if (best.matches == 0) best.why = "too few descriptor matches (" + std::to_string(t.matches) + ")";
       continue;
     }
-    std::vector<Eigen::Vector3d> p_w;
-    std::vector<Eigen::Vector2d> xy;
-    p_w.reserve(pairs.size());
-    xy.reserve(pairs.size());
-    for (const auto& [q, k] : pairs) {
-      const Point& p = e.points[static_cast<std::size_t>(k)];
-      const map::Landmark* l = map.landmark(p.landmark_id);
-      p_w.push_back(l ? l->p_w : p.p_w);
-      xy.push_back(frame.tracks[d.track[static_cast<std::size_t>(q)]].xy);
-    }
-    const geometry::PnpResult r = geometry::solvePnpRansac(p_w, xy, pnp_, nullptr);
-    const double ratio = static_cast<double>(r.num_inliers) / static_cast<double>(pairs.size());
+    const geometry::PnpResult& r = t.pose;
+    const double ratio = static_cast<double>(r.num_inliers) / static_cast<double>(t.matches);
     if (!r.ok || r.num_inliers < config_.min_inliers || ratio < config_.min_inlier_ratio) {
-      if (static_cast<int>(pairs.size()) > best.matches) {
-        best.matches = static_cast<int>(pairs.size());
+      if (t.matches > best.matches) {
+        best.matches = t.matches;
         best.inliers = r.num_inliers;
-        best.why = "P3P found " + std::to_string(r.num_inliers) + " inliers of " + std::to_string(pairs.size()) +
+        best.why = "P3P found " + std::to_string(r.num_inliers) + " inliers of " + std::to_string(t.matches) +
                    " matches with keyframe " + std::to_string(e.frame_index);
       }
       continue;
@@ -367,7 +388,7 @@ Relocalization Relocalizer::relocalize(const cv::Mat& image, const FrameContext&
     best.T_w_c = r.T_w_c;
     best.keyframe = e.frame_index;
     best.quarter_turns = 2 * c.orientation;
-    best.matches = static_cast<int>(pairs.size());
+    best.matches = t.matches;
     best.inliers = r.num_inliers;
     best.votes = c.votes;
   }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
 
 #include "vitamin_e/map/map.h"
 #include "vitamin_e/pipeline/frame_context.h"
@@ -134,6 +135,33 @@ TEST(Relocalizer, FindsACameraOneMetreAwayToOneCentimetre) {
   EXPECT_EQ(r.quarter_turns, 0);
   EXPECT_GE(r.inliers, 100);
   expectNear(r.T_w_c, T_w_lost, 0.01, 0.2);
+}
+
+// The candidates are tried on OpenCV's worker threads and chosen in their order:
+// one thread or several give the same answer to the bit, found or not.
+TEST(Relocalizer, TheAnswerDoesNotDependOnTheThreads) {
+  ve::map::Map map;
+  Relocalizer relocalizer(RelocalizerConfig{}, world().camera, pnpConfig());
+  indexKeyframe(cameraAt(0.0, 0.0, 0.0), 1, &map, &relocalizer);
+  indexKeyframe(cameraAt(0.0, 0.0, M_PI), 2, &map, &relocalizer);
+  indexKeyframe(cameraAt(0.4, 0.3, 0.5), 3, &map, &relocalizer);
+  const FrameContext found = world().detect(world().render(cameraAt(0.2, -0.98, 0.17), 99), 3);
+  const FrameContext unseen = world().detect(world().render(cameraAt(0.0, 0.0, M_PI / 2), 97), 3);
+  const int threads = cv::getNumThreads();
+  for (const FrameContext* lost : {&found, &unseen}) {
+    cv::setNumThreads(1);
+    const Relocalization one = relocalizer.relocalize(lost->image, *lost, map);
+    cv::setNumThreads(4);
+    const Relocalization many = relocalizer.relocalize(lost->image, *lost, map);
+    cv::setNumThreads(threads);
+    EXPECT_EQ(one.ok, many.ok);
+    EXPECT_EQ(one.why, many.why);
+    EXPECT_EQ(one.keyframe, many.keyframe);
+    EXPECT_EQ(one.matches, many.matches);
+    EXPECT_EQ(one.inliers, many.inliers);
+    EXPECT_TRUE(one.T_w_c.matrix() == many.T_w_c.matrix());
+  }
+  EXPECT_TRUE(relocalizer.relocalize(found.image, found, map).ok);
 }
 
 TEST(Relocalizer, FindsAnUpsideDownCamera) {
