@@ -3,7 +3,9 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <stdexcept>
@@ -37,6 +39,50 @@ void TwoViewConfig::validate() const {
   if (!(min_valid_ratio >= 0.0 && min_valid_ratio <= 1.0))
     throw std::invalid_argument("min_valid_ratio must be in [0, 1]");
 }
+
+namespace detail {
+
+int poseFromEssential(const Eigen::Matrix3d& E, const std::vector<Eigen::Vector2d>& xy0,
+                      const std::vector<Eigen::Vector2d>& xy1, const std::vector<bool>& mask, double max_depth,
+                      Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+  if (!E.allFinite()) return 0;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(E, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  if (!(svd.singularValues()(0) > 0.0)) return 0;
+  Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+  if (U.determinant() < 0.0) U = -U;
+  if (V.determinant() < 0.0) V = -V;
+  Eigen::Matrix3d W;
+  W << 0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0;
+  const Eigen::Matrix3d Rs[2] = {U * W * V.transpose(), U * W.transpose() * V.transpose()};
+  const Eigen::Vector3d t0 = U.col(2);
+  // good[2 r + s]: rotation r, translation +t0 (s = 0) or -t0 (s = 1). Flipping t flips both
+  // least-squares depths, so one solve per rotation serves both signs.
+  std::array<int, 4> good{};
+  const size_t n = std::min(xy0.size(), xy1.size());
+  for (size_t i = 0; i < n; ++i) {
+    if (i < mask.size() && !mask[i]) continue;
+    const Eigen::Vector3d b = xy1[i].homogeneous();
+    for (size_t r = 0; r < 2; ++r) {
+      const Eigen::Vector3d a = Rs[r] * xy0[i].homogeneous();
+      // z0 a - z1 b = -t0 in least squares.
+      const double aa = a.squaredNorm(), ab = a.dot(b), bb = b.squaredNorm();
+      const double at = a.dot(t0), bt = b.dot(t0);
+      const double det = aa * bb - ab * ab;
+      if (!(det > 1e-15 * aa * bb)) continue;  // parallel rays: no depth
+      const double z0 = (-at * bb + bt * ab) / det;
+      const double z1 = (z0 * a + t0).z();  // depth in camera 1 of the point at depth z0 (x0's z is 1)
+      if (z0 > 0.0 && z1 > 0.0 && z0 < max_depth && z1 < max_depth) ++good[2 * r];
+      if (z0 < 0.0 && z1 < 0.0 && -z0 < max_depth && -z1 < max_depth) ++good[2 * r + 1];
+    }
+  }
+  const size_t best = static_cast<size_t>(std::max_element(good.begin(), good.end()) - good.begin());
+  if (good[best] == 0) return 0;
+  *R = Rs[best / 2];
+  *t = best % 2 == 0 ? t0 : Eigen::Vector3d(-t0);
+  return good[best];
+}
+
+}  // namespace detail
 
 Eigen::Matrix3d fitRotationOnly(const std::vector<Eigen::Vector2d>& xy0, const std::vector<Eigen::Vector2d>& xy1,
                                 const std::vector<bool>& mask) {
@@ -229,18 +275,21 @@ TwoViewResult initializeTwoView(const std::vector<Eigen::Vector2d>& xy0, const s
       return res;
     }
   }
-  E = E.rowRange(0, 3).clone();
-  cv::Mat Rcv, tcv;
-  const int n_good = cv::recoverPose(E, p0, p1, K, Rcv, tcv, mask);
+  Eigen::Matrix3d E_eig;
+  cv::cv2eigen(cv::Mat(E.rowRange(0, 3)), E_eig);
+  std::vector<bool> ransac_in(n, true);
+  if (mask.total() == static_cast<size_t>(n)) {
+    for (int i = 0; i < n; ++i) ransac_in[i] = mask.at<std::uint8_t>(i) != 0;
+  }
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::UnitZ();
+  // 50 |t|: cv::recoverPose's distance threshold for points at infinity.
+  const int n_good = detail::poseFromEssential(E_eig, xy0, xy1, ransac_in, 50.0, &R, &t);
   if (n_good < config.min_points) {
     res.reason = "too few essential-matrix inliers";
     return res;
   }
   std::vector<bool> e_in(n, false);
-  Eigen::Matrix3d R;
-  Eigen::Vector3d t;
-  cv::cv2eigen(Rcv, R);
-  cv::cv2eigen(tcv, t);
   // The RANSAC model comes from a minimal sample and its inlier set is biased towards it:
   // alternate re-selecting the correspondences (Sampson distance < 2 thresholds) under the
   // current model and polishing the model on them.

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "vitamin_e/geometry/lie.h"
 
@@ -40,6 +41,16 @@ inline Eigen::Matrix<double, 1, 5> sampsonJacobian(const Eigen::Matrix3d& R, con
   J.rightCols<2>() = s * ((R * x0).cross(x1)).transpose() * B;
   return J;
 }
+
+// The relative pose (R, t: x_c1 = R x_c0 + t, |t| = 1) an essential matrix stands for: of its
+// four decompositions the one that puts the most masked correspondences (normalized
+// coordinates) in front of both cameras, nearer than max_depth (in units of |t|). Returns that
+// count; 0 (R, t untouched) for a degenerate E. Each point's depths are the least-squares
+// solution of z1 x1 = z0 R x0 + t, a 2x2 solve: cv::recoverPose triangulates every point by an
+// SVD for each of the four, most of the initializer's time (docs/PERFORMANCE.md, Profile).
+int poseFromEssential(const Eigen::Matrix3d& E, const std::vector<Eigen::Vector2d>& xy0,
+                      const std::vector<Eigen::Vector2d>& xy1, const std::vector<bool>& mask, double max_depth,
+                      Eigen::Matrix3d* R, Eigen::Vector3d* t);
 
 }  // namespace detail
 }  // namespace geometry

@@ -1,8 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
 
 #include "../../src/geometry/two_view_detail.h"
 #include "vitamin_e/geometry/lie.h"
@@ -270,6 +275,62 @@ TEST(TwoViewRefinement, SampsonJacobianIsTheFullDerivativeAtExactCorrespondences
     EXPECT_LT((analytic - numeric).norm(), 1e-6 * numeric.norm())
         << "trial " << trial << "\nanalytic " << analytic << "\nnumeric  " << numeric;
   }
+}
+
+// The pose chosen from an essential matrix is cv::recoverPose's (the reference it replaces):
+// the same decomposition, and on inliers away from the depth limits the same count.
+TEST(TwoViewEssential, PoseFromEssentialIsRecoverPosesChoice) {
+  const double deg = M_PI / 180.0;
+  const Eigen::Isometry3d motions[] = {
+      Eigen::Translation3d(0.4, 0.05, 0.1) * Eigen::AngleAxisd(3 * deg, Eigen::Vector3d::UnitY()),
+      Eigen::Translation3d(-0.1, 0.02, -0.8) * Eigen::AngleAxisd(-6 * deg, Eigen::Vector3d::UnitY()),  // forward
+      Eigen::Translation3d(0.05, -0.3, 0.2) * Eigen::AngleAxisd(10 * deg, Eigen::Vector3d(1, 2, 3).normalized()),
+  };
+  unsigned seed = 7;
+  for (const Eigen::Isometry3d& T_c1_c0 : motions) {
+    std::vector<Eigen::Vector2d> xy0, xy1;
+    std::vector<Eigen::Vector3d> pts;
+    makeScene(T_c1_c0, 300, 0.5, 0.2, seed++, &xy0, &xy1, &pts);
+    const Eigen::Vector3d t_true = T_c1_c0.translation().normalized();
+    const Eigen::Matrix3d E = skew(t_true) * T_c1_c0.linear();
+    std::vector<bool> in(xy0.size(), true);
+    cv::Mat mask(static_cast<int>(xy0.size()), 1, CV_8U, cv::Scalar(1));
+    std::vector<cv::Point2d> p0, p1;
+    for (size_t i = 0; i < xy0.size(); ++i) {
+      p0.emplace_back(xy0[i].x(), xy0[i].y());
+      p1.emplace_back(xy1[i].x(), xy1[i].y());
+      if (i < xy0.size() / 5) in[i] = false, mask.at<std::uint8_t>(static_cast<int>(i)) = 0;  // makeScene's outliers
+    }
+    cv::Mat Ecv, Rcv, tcv;
+    cv::eigen2cv(E, Ecv);
+    const int cv_good = cv::recoverPose(Ecv, p0, p1, cv::Mat::eye(3, 3, CV_64F), Rcv, tcv, mask);
+    Eigen::Matrix3d R_cv;
+    Eigen::Vector3d t_cv;
+    cv::cv2eigen(Rcv, R_cv);
+    cv::cv2eigen(tcv, t_cv);
+
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    const int good = detail::poseFromEssential(E, xy0, xy1, in, 50.0, &R, &t);
+    EXPECT_EQ(good, cv_good);
+    EXPECT_EQ(good, 240);  // every inlier lies in front of both cameras
+    EXPECT_LT((R - R_cv).norm(), 1e-9);
+    EXPECT_LT((t - t_cv).norm(), 1e-9);
+    EXPECT_LT((R - T_c1_c0.linear()).norm(), 1e-9);
+    EXPECT_LT((t - t_true).norm(), 1e-9);
+  }
+}
+
+TEST(TwoViewEssential, PoseFromEssentialRefusesADegenerateMatrix) {
+  const std::vector<Eigen::Vector2d> xy(10, Eigen::Vector2d(0.1, 0.2));
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::UnitX();
+  Eigen::Matrix3d E = Eigen::Matrix3d::Zero();
+  E(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(detail::poseFromEssential(E, xy, xy, {}, 50.0, &R, &t), 0);
+  EXPECT_EQ(detail::poseFromEssential(Eigen::Matrix3d::Zero(), xy, xy, {}, 50.0, &R, &t), 0);
+  EXPECT_EQ(R, Eigen::Matrix3d::Identity());
+  EXPECT_EQ(t, Eigen::Vector3d::UnitX());
 }
 
 TEST(TwoView, ConfigValidation) {

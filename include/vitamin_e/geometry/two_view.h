@@ -2,9 +2,9 @@
 // Two-view initialization from normalized correspondences (undistorted x/z, y/z).
 //
 // Method: 5-point essential matrix in RANSAC (cv::findEssentialMat with an identity camera
-// matrix; the pixel threshold is divided by focal_px), pose by cv::recoverPose (cheirality
-// vote over the four decompositions), DLT + Gauss-Newton triangulation of every inlier, then
-// checks.
+// matrix; the pixel threshold is divided by focal_px), pose by a cheirality vote over the four
+// decompositions (cv::recoverPose's choice, with a 2x2 least-squares depth per point instead of
+// its SVD), DLT + Gauss-Newton triangulation of every inlier, then checks.
 // Planar scenes: the essential matrix of a plane is not unique. Besides the true motion, a
 // 'twisted' one (roughly along the plane normal, rotated by a few degrees) explains every
 // correspondence, and RANSAC returns either; under the twisted one about half of the points
