@@ -1,7 +1,8 @@
 #pragma once
 // Internal to vitamin_e_geometry: the residual of the two-view refinement (two_view.cpp) and its
-// analytic Jacobian, in a header of their own so that test_geometry_two_view checks the Jacobian
-// against numeric derivatives.
+// analytic Jacobian, and the pose choice from an essential matrix, in a header of their own so
+// that test_geometry_two_view checks the Jacobian against numeric derivatives and the pose
+// choice against cv::recoverPose.
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
